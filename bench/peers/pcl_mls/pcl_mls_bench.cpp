@@ -1,6 +1,6 @@
 // One PCL MLS pass (polynomial order 1), timed: the peer for bench/run.py.
 //
-//   pcl_mls_bench INPUT K [--threads T] [--radius R] [--calib-samples S] [--out FILE]
+//   pcl_mls_bench INPUT K [--threads T] [--radius R] [--calib-samples S] [--reps N] [--out FILE]
 //
 // INPUT is either a headerless little-endian float32 file of n*3 values (x y z ...),
 // or a PLY file (extension .ply, read with pcl::io::loadPLYFile; only x y z used).
@@ -11,7 +11,9 @@
 //
 // Prints ONE JSON line on stdout. "process_s" is the wall time of
 // MovingLeastSquares::process() only (it includes PCL's own kd-tree build, as
-// pointscale's decompose includes its own).
+// pointscale's decompose includes its own). With --reps N the pass is repeated on a
+// fresh MovingLeastSquares object N times and "process_s" is the median
+// ("process_all_s" lists every run); peak RSS is read after the first run.
 #include <pcl/point_types.h>
 #include <pcl/point_cloud.h>
 #include <pcl/kdtree/kdtree_flann.h>
@@ -105,7 +107,7 @@ double mean_count(const pcl::KdTreeFLANN<pcl::PointXYZ>& tree,
 int main(int argc, char** argv) {
   if (argc < 3) {
     std::cerr << "usage: pcl_mls_bench INPUT K [--threads T] [--radius R] "
-                 "[--calib-samples S] [--out FILE]\n";
+                 "[--calib-samples S] [--reps N] [--out FILE]\n";
     return 2;
   }
   const std::string path = argv[1];
@@ -114,6 +116,7 @@ int main(int argc, char** argv) {
   int threads = 2;
   double radius = 0;
   int calib_samples = 20000;
+  int reps = 1;
   std::string out_path;
   for (int a = 3; a < argc; ++a) {
     std::string s = argv[a];
@@ -125,6 +128,7 @@ int main(int argc, char** argv) {
     else if (s == "--radius") radius = std::atof(next());
     else if (s == "--calib-samples") calib_samples = std::atoi(next());
     else if (s == "--out") out_path = next();
+    else if (s == "--reps") reps = std::max(1, std::atoi(next()));
     else die("unknown option " + s);
   }
 
@@ -202,23 +206,41 @@ int main(int argc, char** argv) {
   const int median_count = counts[counts.size() / 2];
   const double calib_s = seconds_since(t0);
 
-  // ---- the timed MLS pass ----
+  // ---- the timed MLS pass(es) ----
   pcl::PointCloud<pcl::PointNormal> out;
-  pcl::MovingLeastSquares<pcl::PointXYZ, pcl::PointNormal> mls;
-  pcl::search::KdTree<pcl::PointXYZ>::Ptr search(new pcl::search::KdTree<pcl::PointXYZ>);
-  mls.setInputCloud(cloud);
-  mls.setSearchMethod(search);
-  mls.setSearchRadius(radius);
-  mls.setPolynomialOrder(1);
-  mls.setComputeNormals(true);
-  mls.setNumberOfThreads(threads);
-  mls.setUpsamplingMethod(pcl::MovingLeastSquares<pcl::PointXYZ, pcl::PointNormal>::NONE);
-
-  const long rss_before_kib = maxrss_kib();
-  t0 = Clock::now();
-  mls.process(out);
-  const double process_s = seconds_since(t0);
-  const long rss_after_kib = maxrss_kib();
+  pcl::PointIndicesPtr corr;
+  std::vector<double> times;
+  long rss_before_kib = 0, rss_after_kib = 0;
+  for (int r = 0; r < reps; ++r) {
+    pcl::MovingLeastSquares<pcl::PointXYZ, pcl::PointNormal> mls;
+    pcl::search::KdTree<pcl::PointXYZ>::Ptr search(new pcl::search::KdTree<pcl::PointXYZ>);
+    mls.setInputCloud(cloud);
+    mls.setSearchMethod(search);
+    mls.setSearchRadius(radius);
+    mls.setPolynomialOrder(1);
+    mls.setComputeNormals(true);
+    mls.setNumberOfThreads(threads);
+    mls.setUpsamplingMethod(pcl::MovingLeastSquares<pcl::PointXYZ, pcl::PointNormal>::NONE);
+    out.clear();
+    if (r == 0) rss_before_kib = maxrss_kib();
+    t0 = Clock::now();
+    mls.process(out);
+    times.push_back(seconds_since(t0));
+    if (r == 0) rss_after_kib = maxrss_kib();
+    corr = mls.getCorrespondingIndices();
+  }
+  std::vector<double> sorted_times = times;
+  std::sort(sorted_times.begin(), sorted_times.end());
+  const double process_s = sorted_times.size() % 2
+      ? sorted_times[sorted_times.size() / 2]
+      : 0.5 * (sorted_times[sorted_times.size() / 2 - 1] + sorted_times[sorted_times.size() / 2]);
+  std::string all_times = "[";
+  for (std::size_t i = 0; i < times.size(); ++i) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%s%.4f", i ? ", " : "", times[i]);
+    all_times += buf;
+  }
+  all_times += "]";
 
   // Sanity: mean displacement of the projected points (bbox-diagonal relative).
   double minv[3] = {1e300, 1e300, 1e300}, maxv[3] = {-1e300, -1e300, -1e300};
@@ -232,7 +254,6 @@ int main(int argc, char** argv) {
   // Output order follows PCL's per-thread chunks, so pair points via the indices.
   double disp = 0;
   std::size_t finite = 0;
-  const auto corr = mls.getCorrespondingIndices();
   if (corr && corr->indices.size() == out.size()) {
     for (std::size_t j = 0; j < out.size(); ++j) {
       const auto& q = out[j];
@@ -257,10 +278,10 @@ int main(int argc, char** argv) {
       "\"k_target\": %d, \"radius\": %.9g, \"radius_calibrated\": %s, "
       "\"mean_neighbors\": %.3f, \"median_neighbors\": %d, \"calib_samples\": %zu, "
       "\"calib_iters\": %d, \"polynomial_order\": 1, \"threads\": %d, "
-      "\"load_s\": %.4f, \"calib_s\": %.4f, \"process_s\": %.4f, \"n_out\": %zu, "
+      "\"load_s\": %.4f, \"calib_s\": %.4f, \"process_s\": %.4f, \"process_all_s\": %s, \"n_out\": %zu, "
       "\"mean_disp_rel\": %.3g, \"maxrss_before_kib\": %ld, \"maxrss_after_kib\": %ld}\n",
       PCL_VERSION_PRETTY, n, k, radius, calibrated ? "true" : "false", achieved, median_count,
-      sample.size(), calib_iters, threads, load_s, calib_s, process_s, out.size(),
+      sample.size(), calib_iters, threads, load_s, calib_s, process_s, all_times.c_str(), out.size(),
       finite ? disp / finite / diag : -1.0, rss_before_kib, rss_after_kib);
   return 0;
 }
