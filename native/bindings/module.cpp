@@ -1,0 +1,232 @@
+// pybind11 bindings: the only C++ file that knows Python. Every long call releases the GIL; the
+// progress callback takes it back only for the moment it runs.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "pointscale/cluster_decimation.h"
+#include "pointscale/decomposition.h"
+#include "pointscale/mls_projection.h"
+#include "pointscale/normal_estimation.h"
+#include "pointscale/parallel.h"
+#include "pointscale/reconstruction.h"
+#include "pointscale/sample_spacing.h"
+
+namespace py = pybind11;
+using namespace pointscale;
+
+namespace {
+
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using IndexArray = py::array_t<Index, py::array::c_style | py::array::forcecast>;
+
+Points to_points(const DoubleArray& a) {
+  if (a.ndim() != 2 || a.shape(1) != 3) throw std::invalid_argument("expected an (n, 3) array");
+  Points p(a.shape(0), 3);
+  std::copy(a.data(), a.data() + a.size(), p.data());
+  return p;
+}
+
+template <class T>
+py::array_t<T> to_array(const std::vector<T>& v, std::vector<py::ssize_t> shape) {
+  py::array_t<T> out(shape);
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+// Wraps a Python callable as a ProgressCallback. A Python exception raised inside it cancels the
+// work and is re-raised once the GIL is back.
+struct PythonProgress {
+  py::object callable;
+  ProgressCallback callback;
+  explicit PythonProgress(py::object c) : callable(std::move(c)) {
+    if (callable.is_none()) return;
+    callback = [this](double fraction) -> bool {
+      py::gil_scoped_acquire gil;
+      try {
+        py::object r = callable(fraction);
+        return r.is_none() || r.cast<bool>();
+      } catch (py::error_already_set& e) {
+        e.restore();
+        return false;
+      }
+    };
+  }
+  const ProgressCallback* get() const { return callback ? &callback : nullptr; }
+};
+
+// Runs f without the GIL; turns a cancellation caused by a Python exception into that exception.
+template <class F>
+auto without_gil(F&& f) {
+  try {
+    py::gil_scoped_release release;
+    return f();
+  } catch (const Cancelled&) {
+    if (PyErr_Occurred()) throw py::error_already_set();
+    throw;
+  }
+}
+
+py::dict report_dict(const LevelReport& r) {
+  py::dict d;
+  d["support_points"] = r.support_points;
+  d["kernel_width"] = r.kernel_width;
+  d["not_converged"] = r.not_converged;
+  d["degenerate"] = r.degenerate;
+  d["consistency_iterations"] = r.consistency_iterations;
+  d["consistency_residual"] = r.consistency_residual;
+  d["pinned"] = r.pinned;
+  return d;
+}
+
+py::dict model_arrays(const MultiscaleModel& m) {
+  py::dict d;
+  const int k = m.bands();
+  const py::ssize_t n = m.base.rows();
+  d["base"] = m.base;
+  d["details"] = Eigen::MatrixXd(m.details);
+  d["base_normals"] = m.base_normals;
+  py::array_t<Index> labels({static_cast<py::ssize_t>(k), n});
+  for (int l = 0; l < k; ++l) {
+    std::copy(m.support[l].labels.begin(), m.support[l].labels.end(), labels.mutable_data(l, 0));
+    const std::string s = std::to_string(l);
+    d[("neighborhoods_" + s).c_str()] =
+        to_array(m.support[l].neighborhoods, {m.support[l].clusters, m.support[l].neighbors});
+    d[("kernel_" + s).c_str()] = Eigen::VectorXd(m.support[l].h);
+    d[("anchors_" + s).c_str()] = to_array(m.support[l].anchors, {m.support[l].clusters});
+    d[("frames_" + s).c_str()] = to_array(m.support[l].frames, {m.support[l].clusters, 2});
+    d[("local_" + s).c_str()] = m.support[l].local;
+  }
+  d["labels"] = labels;
+  return d;
+}
+
+MultiscaleModel model_from_arrays(const py::dict& d) {
+  MultiscaleModel m;
+  m.base = to_points(d["base"].cast<DoubleArray>());
+  const Eigen::Index n = m.base.rows();
+  auto details = d["details"].cast<DoubleArray>();
+  if (details.ndim() != 2 || details.shape(1) != n) throw std::invalid_argument("details must be (k, n)");
+  const int k = static_cast<int>(details.shape(0));
+  m.details.resize(k, n);
+  for (int l = 0; l < k; ++l)
+    for (Eigen::Index i = 0; i < n; ++i) m.details(l, i) = details.at(l, i);
+  m.base_normals = to_points(d["base_normals"].cast<DoubleArray>());
+  auto labels = d["labels"].cast<IndexArray>();
+  if (labels.ndim() != 2 || labels.shape(0) != k || labels.shape(1) != n) throw std::invalid_argument("labels must be (k, n)");
+  m.support.resize(k);
+  m.reports.resize(k);
+  for (int l = 0; l < k; ++l) {
+    const std::string s = std::to_string(l);
+    LevelSupport& sup = m.support[l];
+    auto nb = d[("neighborhoods_" + s).c_str()].cast<IndexArray>();
+    auto h = d[("kernel_" + s).c_str()].cast<DoubleArray>();
+    if (nb.ndim() != 2 || h.ndim() != 1 || h.shape(0) != nb.shape(0)) throw std::invalid_argument("inconsistent support arrays at level " + s);
+    sup.clusters = static_cast<Index>(nb.shape(0));
+    sup.neighbors = static_cast<int>(nb.shape(1));
+    sup.neighborhoods.assign(nb.data(), nb.data() + nb.size());
+    sup.labels.assign(labels.data(l, 0), labels.data(l, 0) + n);
+    sup.h = Eigen::Map<const Eigen::VectorXd>(h.data(), h.shape(0));
+    auto an = d[("anchors_" + s).c_str()].cast<IndexArray>();
+    if (an.ndim() != 1 || an.shape(0) != sup.clusters) throw std::invalid_argument("anchors must be (clusters,) at level " + s);
+    sup.anchors.assign(an.data(), an.data() + an.size());
+    for (Index v : sup.anchors) if (v < 0 || v >= n) throw std::invalid_argument("anchor out of range at level " + s);
+    auto fr = d[("frames_" + s).c_str()].cast<IndexArray>();
+    if (fr.ndim() != 2 || fr.shape(0) != sup.clusters || fr.shape(1) != 2) throw std::invalid_argument("frames must be (clusters, 2) at level " + s);
+    sup.frames.assign(fr.data(), fr.data() + fr.size());
+    sup.local = to_points(d[("local_" + s).c_str()].cast<DoubleArray>());
+    if (sup.local.rows() != n) throw std::invalid_argument("local coordinates must be (n, 3) at level " + s);
+    for (Index v : sup.frames) if (v < 0 || v >= sup.clusters) throw std::invalid_argument("frame out of range at level " + s);
+    for (Index v : sup.labels) if (v < 0 || v >= sup.clusters) throw std::invalid_argument("label out of range at level " + s);
+    for (Index v : sup.neighborhoods) if (v < 0 || v >= sup.clusters) throw std::invalid_argument("neighbourhood out of range at level " + s);
+  }
+  return m;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "Pointscale native core. Use the pointscale package, which checks inputs, instead of this module.";
+  py::register_exception<Cancelled>(m, "Cancelled");
+
+  m.def("set_threads", &set_thread_count, py::arg("threads"));
+  m.def("thread_count", &thread_count);
+
+  py::class_<MultiscaleModel>(m, "Model")
+      .def_property_readonly("base", [](const MultiscaleModel& s) { return s.base; })
+      .def_property_readonly("details", [](const MultiscaleModel& s) { return Eigen::MatrixXd(s.details); })
+      .def_property_readonly("base_normals", [](const MultiscaleModel& s) { return s.base_normals; })
+      .def_property_readonly("bands", &MultiscaleModel::bands)
+      .def_property_readonly("reports", [](const MultiscaleModel& s) {
+        py::list out;
+        for (const auto& r : s.reports) out.append(report_dict(r));
+        return out;
+      })
+      .def("to_arrays", &model_arrays)
+      .def_static("from_arrays", &model_from_arrays)
+      .def("reconstruct", [](const MultiscaleModel& s, const DoubleArray& gains, py::object base, bool keep_levels,
+                             int upto, py::object progress) {
+        Eigen::MatrixXd g(gains.shape(0), gains.ndim() == 2 ? gains.shape(1) : 1);
+        std::copy(gains.data(), gains.data() + gains.size(), g.data());
+        g = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(gains.data(), g.rows(), g.cols());
+        Points edited;
+        const bool has_base = !base.is_none();
+        if (has_base) edited = to_points(base.cast<DoubleArray>());
+        PythonProgress p(progress);
+        Reconstruction r = without_gil([&] { return reconstruct(s, g, has_base ? &edited : nullptr, keep_levels, upto, p.get()); });
+        if (!keep_levels) return py::object(py::cast(std::move(r.positions)));
+        return py::object(py::make_tuple(py::cast(r.levels), py::cast(r.normals)));
+      }, py::arg("gains"), py::arg("base") = py::none(), py::arg("keep_levels") = false, py::arg("upto") = -1,
+         py::arg("progress") = py::none());
+
+  m.def("decompose", [](const DoubleArray& points, py::object normals, int levels, double decimation, double kernel,
+                        int neighbors, double tolerance, int max_iterations, double max_variation, py::object progress) {
+    Points p = to_points(points);
+    Points n;
+    const bool has_normals = !normals.is_none();
+    if (has_normals) n = to_points(normals.cast<DoubleArray>());
+    DecomposeOptions o;
+    o.levels = levels;
+    o.decimation = decimation;
+    o.kernel = kernel;
+    o.max_variation = max_variation;
+    o.mls.neighbors = neighbors;
+    o.mls.tolerance = tolerance;
+    o.mls.max_iterations = max_iterations;
+    PythonProgress pp(progress);
+    return without_gil([&] { return decompose(p, has_normals ? &n : nullptr, o, pp.get()); });
+  });
+
+  m.def("project", [](const DoubleArray& points, const DoubleArray& onto, double kernel, int neighbors,
+                      double tolerance, int max_iterations, py::object progress) {
+    Points x = to_points(points), s = to_points(onto);
+    MlsOptions o;
+    o.neighbors = neighbors;
+    o.tolerance = tolerance;
+    o.max_iterations = max_iterations;
+    PythonProgress pp(progress);
+    MlsResult r = without_gil([&] {
+      SpatialIndex index(s);
+      const Eigen::VectorXd h = kernel * local_spacing(index, 6);
+      return mls_project(x, index, h, o, ProgressStage{pp.get(), 0.0, 1.0});
+    });
+    return py::make_tuple(r.positions, r.normals, r.not_converged, r.degenerate);
+  });
+
+  m.def("decimate", [](const DoubleArray& points, std::size_t target, double max_variation) {
+    Points p = to_points(points);
+    Clustering c = without_gil([&] { return cluster_decimate(p, target, max_variation); });
+    return py::make_tuple(c.centroids, to_array(c.labels, {static_cast<py::ssize_t>(c.labels.size())}));
+  });
+
+  m.def("estimate_normals", [](const DoubleArray& points, int neighbors, bool orient) {
+    Points p = to_points(points);
+    return without_gil([&] {
+      SpatialIndex index(p);
+      Points normals = pca_normals(index, neighbors);
+      if (orient) orient_normals(index, normals, neighbors);
+      return normals;
+    });
+  });
+}

@@ -1,0 +1,19 @@
+// Hierarchical-clustering decimation (Pauly et al. 2002; the paper's Sec. 5.2).
+#pragma once
+#include "pointscale/types.h"
+
+namespace pointscale {
+
+struct Clustering {
+  Points centroids;  // #C by 3
+  IndexList labels;  // #P, the cluster of each input point
+};
+
+// Splits clusters through their centroid, along the axis of largest covariance, largest cluster
+// first, until there are `target` clusters; a cluster whose surface variation exceeds
+// `max_variation` counts as four times its size, so curved regions get more, smaller clusters.
+// Clusters of identical points cannot be split, so fewer than `target` may come back.
+// points  #P by 3
+Clustering cluster_decimate(const Points& points, std::size_t target, double max_variation = 0.05);
+
+}  // namespace pointscale

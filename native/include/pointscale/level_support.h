@@ -1,0 +1,61 @@
+// The normals of one level, as a function of that level's points alone, so that reconstruction
+// can recompute them after the user edits the level (Sec. 8.1). Each decimation cluster is
+// represented by one anchor point of the level, its member with the least detail; the normal at
+// a point is the weighted least-squares plane normal (Eq. 3) of the nearby anchors. The cluster labels, each cluster's neighbour
+// clusters and kernel widths are cached at decomposition time, like a mesh's connectivity.
+#pragma once
+#include "pointscale/progress.h"
+#include "pointscale/types.h"
+
+namespace pointscale {
+
+struct LevelSupport {
+  IndexList labels;          // #P cluster of each point
+  IndexList anchors;         // #C the point that represents each cluster
+  Index clusters = 0;        // #C
+  int neighbors = 0;         // K
+  IndexList neighborhoods;   // #C by K nearest clusters of each cluster, itself first
+  Eigen::VectorXd h;         // #C kernel width of each cluster
+  IndexList frames;          // #C by 2: the neighbour clusters that span each cluster's frame
+  Points local;              // #P by 3: each point's query position in its cluster's frame
+};
+
+// Chooses each cluster's frame and stores every point's coordinates in it. The normal of a
+// point is evaluated at that query position, which moves with the centroids only, so a point's
+// normal does not depend on the point itself: this keeps the offsets-along-normals condition
+// solvable even where detail is larger than the level's radius of curvature.
+// centroids #C by 3 from support_centroids(positions); positions #P by 3.
+void attach_frames(const Points& centroids, const Points& positions, LevelSupport& support);
+
+// The query position of every point for the given centroids: #P by 3.
+Points frame_positions(const Points& centroids, const LevelSupport& support);
+
+// Normals of a level from its points alone: centroids, then frames, then support_normals.
+Points level_normals(const Points& level, const LevelSupport& support, const Points& reference,
+                     const ProgressStage& stage = {});
+
+// The anchors' positions in the level. level  #P by 3; returns #C by 3.
+Points support_centroids(const Points& level, const LevelSupport& support);
+
+// Picks each cluster's anchor: the member with the smallest |fine - level|, whose own normal then
+// barely depends on itself, so the offsets-along-normals condition converges quickly.
+void choose_anchors(const Points& fine, const Points& level, LevelSupport& support);
+
+// Unit normals at the query points, each fitted to the centroids around its cluster, with the
+// sign chosen so that n . reference >= 0 (a zero reference row keeps the eigenvector's sign).
+// query       #Q by 3 positions
+// query_labels #Q cluster of each query point
+// centroids   #C by 3, from support_centroids
+// reference   #Q by 3 orientation references
+Points support_normals(const Points& query, const Index* query_labels, const Points& centroids,
+                       const LevelSupport& support, const Points& reference,
+                       const ProgressStage& stage = {});
+
+// Per-point orientation references for an edited level 0: the stored oriented normals carried
+// through the local tangent map from the original to the edited points (a cofactor transport),
+// so the sign stays right even where an edit turns the surface by more than 90 degrees.
+// original, edited  #P by 3; original_normals #P by 3 oriented. Returns #P by 3.
+Points transported_references(const Points& original, const Points& edited, const Points& original_normals,
+                              const LevelSupport& support);
+
+}  // namespace pointscale

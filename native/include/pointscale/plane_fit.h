@@ -1,0 +1,59 @@
+// Weighted least-squares plane through a small set of points (Eq. 2-3 of the paper):
+// the weighted average a and the direction of smallest weighted covariance n.
+#pragma once
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <limits>
+
+#include "pointscale/types.h"
+
+namespace pointscale {
+
+struct PlaneFit {
+  Vec3 mean = Vec3::Zero();    // a(x), Eq. 2
+  Vec3 normal = Vec3::Zero();  // n(x), Eq. 3 (unit, sign arbitrary)
+  double variation = 0.0;      // lambda_min / (sum of eigenvalues): surface variation
+  bool ok = false;             // false when the weights vanish or the covariance has no plane
+};
+
+// Gaussian weights exp(-|p_j - x|^2 / h_j^2), scaled so that the largest is 1. The scaling
+// cancels in the fit and keeps points far outside every kernel from underflowing to zero.
+// d2[j] = |p_j - x|^2, inv_h2[j] = 1 / h_j^2. Writes `count` weights.
+inline void gaussian_weights(const double* d2, const double* inv_h2, int count, double* weights) {
+  double min_e = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < count; ++j) min_e = std::min(min_e, d2[j] * inv_h2[j]);
+  for (int j = 0; j < count; ++j) weights[j] = std::exp(min_e - d2[j] * inv_h2[j]);
+}
+
+// Fits the plane through points rows `indices[0..count)` of `points` with `weights`.
+// `reference` is any nearby point; sums are taken relative to it for precision.
+inline PlaneFit fit_weighted_plane(const Points& points, const Index* indices, const double* weights,
+                                   int count, const Vec3& reference) {
+  PlaneFit fit;
+  double w_sum = 0.0;
+  Vec3 s = Vec3::Zero();
+  Mat3 ss = Mat3::Zero();
+  for (int j = 0; j < count; ++j) {
+    const double w = weights[j];
+    const Vec3 d = points.row(indices[j]).transpose() - reference;
+    w_sum += w;
+    s += w * d;
+    ss.noalias() += w * d * d.transpose();
+  }
+  if (!(w_sum > 0.0)) return fit;
+  const Vec3 m = s / w_sum;
+  const Mat3 cov = ss / w_sum - m * m.transpose();
+  fit.mean = reference + m;
+  Eigen::SelfAdjointEigenSolver<Mat3> eig;
+  eig.computeDirect(cov);
+  const Vec3 ev = eig.eigenvalues();
+  const double trace = ev.sum();
+  // Two vanishing eigenvalues: collinear or a single point, no plane is defined.
+  if (!(trace > 0.0) || ev(1) <= 1e-12 * trace) return fit;
+  fit.normal = eig.eigenvectors().col(0).normalized();
+  fit.variation = std::max(0.0, ev(0)) / trace;
+  fit.ok = true;
+  return fit;
+}
+
+}  // namespace pointscale

@@ -1,0 +1,15 @@
+"""Pointscale: multiscale point-sampled surfaces after Pauly, Kobbelt and Gross (2006).
+
+A surface becomes a smooth base P^0 and a stack of signed normal-displacement bands, so that
+detail can be filtered band by band, carried along a deformed base, or moved between models.
+"""
+from ._core import Cancelled
+from .multiscale import Decomposition, blend, decompose, load, reconstruct, reconstruct_levels
+from .surface import decimate, estimate_normals, project
+from . import shapes
+
+__version__ = "0.1.0"
+__all__ = [
+    "Cancelled", "Decomposition", "blend", "decimate", "decompose", "estimate_normals", "load",
+    "project", "reconstruct", "reconstruct_levels", "shapes",
+]

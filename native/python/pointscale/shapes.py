@@ -1,0 +1,98 @@
+"""Procedural shapes with detail at several scales, for the demo, tests and benchmarks.
+
+Every function returns float64 (n, 3) points (and, where said, extra per-point data); none needs
+a download. Sampling is near-uniform so that spacing-based kernels behave as on scans.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def fibonacci_sphere(n: int) -> np.ndarray:
+    """n near-uniform unit vectors (the golden-angle spiral)."""
+    i = np.arange(n) + 0.5
+    z = 1.0 - 2.0 * i / n
+    r = np.sqrt(1.0 - z * z)
+    phi = np.pi * (3.0 - np.sqrt(5.0)) * i
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+
+
+def sphere(n: int = 20000, radius: float = 1.0, noise: float = 0.0, seed: int = 0) -> np.ndarray:
+    """A sphere, optionally with Gaussian radial noise of standard deviation `noise`."""
+    u = fibonacci_sphere(n)
+    r = radius + noise * np.random.default_rng(seed).standard_normal(n)
+    return u * r[:, None]
+
+
+def bump_field(u: np.ndarray, frequency: float) -> np.ndarray:
+    """A smooth pattern on unit vectors, about `frequency` bumps around a great circle, in [-1, 1]."""
+    f = frequency
+    return np.sin(f * u[:, 0]) * np.sin(f * u[:, 1] + 0.3) * np.sin(f * u[:, 2] + 0.7)
+
+
+def bumpy_sphere(n: int = 40000, coarse: float = 0.08, coarse_frequency: float = 3.0, fine: float = 0.01,
+                 fine_frequency: float = 25.0, noise: float = 0.0, seed: int = 0) -> np.ndarray:
+    """A unit sphere with a coarse and a fine bump pattern (and optional noise) on its radius."""
+    u = fibonacci_sphere(n)
+    r = 1.0 + coarse * bump_field(u, coarse_frequency) + fine * bump_field(u, fine_frequency)
+    if noise:
+        r = r + noise * np.random.default_rng(seed).standard_normal(n)
+    return u * r[:, None]
+
+
+def bumpy_torus(n: int = 40000, major: float = 1.0, minor: float = 0.35, fine: float = 0.015,
+                frequency: float = 12.0) -> np.ndarray:
+    """A torus around z with a fine bump pattern on its tube radius."""
+    side = int(np.sqrt(n * minor / major))
+    nu, nv = max(8, n // max(side, 1)), max(8, side)
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, nu, endpoint=False),
+                       np.linspace(0, 2 * np.pi, nv, endpoint=False), indexing="ij")
+    u, v = u.ravel(), v.ravel()
+    r = minor + fine * np.sin(frequency * u) * np.sin(frequency * v / 2 + 0.5)
+    return np.column_stack([(major + r * np.cos(v)) * np.cos(u), (major + r * np.cos(v)) * np.sin(u), r * np.sin(v)])
+
+
+def wavy_patch(n: int = 30000, size: float = 2.0, coarse: float = 0.15, fine: float = 0.01,
+               fine_frequency: float = 20.0) -> np.ndarray:
+    """An open height-field square with a boundary: a broad wave plus fine ripples."""
+    side = int(np.sqrt(n))
+    x, y = np.meshgrid(np.linspace(-size / 2, size / 2, side), np.linspace(-size / 2, size / 2, side), indexing="ij")
+    x, y = x.ravel(), y.ravel()
+    z = coarse * np.sin(1.5 * x) * np.cos(1.2 * y) + fine * np.sin(fine_frequency * x) * np.sin(fine_frequency * y)
+    return np.column_stack([x, y, z])
+
+
+def handles_plane(size: float = 4.0, spacing: float = 0.025, count: int = 4, width: float = 0.2,
+                  height: float = 0.2):
+    """A square plane (z = 0) with count x count box handles on it, as in the paper's Fig. 5.
+
+    Returns (points (n, 3), handle (n,) int: -1 on the plane, else the handle's index, and
+    centres (count*count, 2): each handle's (x, y) centre).
+    """
+    ticks = np.arange(-size / 2, size / 2 + 1e-9, spacing)
+    x, y = np.meshgrid(ticks, ticks, indexing="ij")
+    plane = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])
+    step = size / count
+    c1 = -size / 2 + step * (np.arange(count) + 0.5)
+    centres = np.array([(cx, cy) for cx in c1 for cy in c1])
+    half = width / 2
+    keep = np.ones(len(plane), bool)
+    parts, labels = [], []
+    s = np.arange(-half, half + 1e-9, spacing)
+    s = s - s.mean()
+    zs = np.arange(spacing, height - 1e-9, spacing)
+    for h, (cx, cy) in enumerate(centres):
+        inside = (np.abs(plane[:, 0] - cx) < half) & (np.abs(plane[:, 1] - cy) < half)
+        keep &= ~inside
+        tx, ty = np.meshgrid(s, s, indexing="ij")
+        top = np.column_stack([cx + tx.ravel(), cy + ty.ravel(), np.full(tx.size, height)])
+        walls = []
+        for z in zs:
+            for t in s:
+                walls += [(cx + t, cy - half, z), (cx + t, cy + half, z), (cx - half, cy + t, z), (cx + half, cy + t, z)]
+        part = np.vstack([top, np.array(walls)])
+        parts.append(part)
+        labels.append(np.full(len(part), h))
+    points = np.vstack([plane[keep]] + parts)
+    handle = np.concatenate([np.full(int(keep.sum()), -1)] + labels)
+    return points, handle, centres

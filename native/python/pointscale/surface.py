@@ -1,0 +1,59 @@
+"""Single-surface tools: MLS projection (Sec. 2), clustering decimation (Sec. 5.2), normals."""
+from __future__ import annotations
+
+import numpy as np
+
+from . import _core
+from ._checks import as_callback, as_points, centre, positive, require_surface
+
+
+def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance: float = 1e-9,
+            max_iterations: int = 50, threads: int = 0, progress=None, return_report: bool = False):
+    """Projects points onto the MLS surface defined by the point set `onto` (the operator Psi).
+
+    points  (n, 3) to project;  onto (m, 3) samples of the surface
+    kernel  kernel width as a multiple of the local sample spacing of `onto`
+    Returns (positions (n, 3), normals (n, 3)); with return_report also a dict with the number
+    of points that did not converge and of points whose neighbourhood defines no plane.
+    Normals are unit and unoriented.
+    """
+    x = as_points(points)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3)
+    s = as_points(onto, "onto", min_count=3)
+    require_surface(s, "onto", allow_planar=True)
+    kernel = positive(kernel, "kernel")
+    tolerance = positive(tolerance, "tolerance")
+    max_iterations = positive(max_iterations, "max_iterations", integer=True)
+    origin = centre(s)
+    _core.set_threads(int(threads))
+    pos, nrm, not_converged, degenerate = _core.project(x - origin, s - origin, kernel, neighbors, tolerance,
+                                                        max_iterations, as_callback(progress))
+    pos = pos + origin
+    if return_report:
+        return pos, nrm, {"not_converged": int(not_converged), "degenerate": int(degenerate)}
+    return pos, nrm
+
+
+def decimate(points, target: int, *, max_variation: float = 0.05):
+    """Hierarchical-clustering decimation (Pauly et al. 2002) to `target` clusters.
+
+    Returns (centroids (target, 3), labels (n,) int32 cluster of each point). Clusters of
+    identical points cannot be split, so duplicates may leave fewer clusters than asked.
+    """
+    p = as_points(points)
+    target = positive(target, "target", integer=True)
+    if target > len(p):
+        raise ValueError(f"target ({target}) exceeds the number of points ({len(p)})")
+    origin = centre(p)
+    c, labels = _core.decimate(p - origin, target, positive(max_variation, "max_variation"))
+    return c + origin, labels
+
+
+def estimate_normals(points, neighbors: int = 16, *, orient: bool = True, threads: int = 0) -> np.ndarray:
+    """Unit PCA normals of each point's neighbourhood, consistently oriented (outward on closed
+    shapes) by spanning-tree propagation when orient is True. Returns (n, 3)."""
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3)
+    p = as_points(points, min_count=neighbors)
+    require_surface(p, allow_planar=True)
+    _core.set_threads(int(threads))
+    return _core.estimate_normals(p - centre(p), neighbors, bool(orient))

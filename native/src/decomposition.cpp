@@ -1,0 +1,185 @@
+#include "pointscale/decomposition.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "pointscale/cluster_decimation.h"
+#include "pointscale/normal_estimation.h"
+#include "pointscale/parallel.h"
+#include "pointscale/sample_spacing.h"
+#include "pointscale/spatial_index.h"
+
+namespace pointscale {
+
+namespace {
+
+double median(Eigen::VectorXd v) {
+  if (v.size() == 0) return 0.0;
+  std::nth_element(v.data(), v.data() + v.size() / 2, v.data() + v.size());
+  return v(v.size() / 2);
+}
+
+struct Consistency {
+  int iterations = 0;
+  double residual = 0.0;
+  std::size_t pinned = 0;
+};
+
+// Moves the points of level l-1 within their tangent planes until fine - p lies along n(p).
+// Normals depend on the anchors only (level_support.h), so the anchors are iterated first,
+// each halving its step when its move grows (near sharp features the plain iteration swings
+// with slope about -d kappa). An anchor that still does not settle is pinned to its finer
+// position (no detail in this band; the coarser bands carry it). Then every other point is made
+// consistent in one step, since its normal no longer depends on it: exact by construction.
+Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSupport& support,
+                                const Points& reference, double scale, int max_iterations,
+                                const ProgressStage& stage) {
+  const double stop = 1e-12 * scale;
+  const Index c_count = support.clusters;
+  std::vector<Index> own(static_cast<std::size_t>(c_count));
+  Points anchor_reference(c_count, 3);
+  for (Index c = 0; c < c_count; ++c) { own[c] = c; anchor_reference.row(c) = reference.row(support.anchors[c]); }
+  std::vector<double> moves(c_count, std::numeric_limits<double>::infinity()), damping(c_count, 1.0);
+  std::vector<unsigned char> pinned(c_count, 0);
+  Consistency out;
+  for (int round = 0;; ++round) {
+    double largest = 0.0;
+    for (int it = 0; it < max_iterations; ++it, ++out.iterations) {
+      stage.report(std::min(1.0, static_cast<double>(out.iterations) / (2.0 * max_iterations)));
+      const Points anchors = support_centroids(level, support);
+      const Points normals = support_normals(anchors, own.data(), anchors, support, anchor_reference);
+      parallel_for(static_cast<std::size_t>(c_count), [&](std::size_t b, std::size_t e) {
+        for (std::size_t c = b; c < e; ++c) {
+          if (pinned[c]) { moves[c] = 0.0; continue; }
+          const Index i = support.anchors[c];
+          const Vec3 nrm = normals.row(static_cast<Eigen::Index>(c)).transpose();
+          const Vec3 f = fine.row(i).transpose();
+          const Vec3 p = level.row(i).transpose();
+          const Vec3 target = f - (f - p).dot(nrm) * nrm;
+          const double full = (target - p).norm();
+          if (full > moves[c]) damping[c] = std::max(damping[c] * 0.5, 1.0 / 64.0);
+          moves[c] = full;
+          level.row(i) = (p + damping[c] * (target - p)).transpose();
+        }
+      });
+      largest = *std::max_element(moves.begin(), moves.end());
+      if (largest <= stop) break;
+    }
+    out.residual = largest;
+    if (largest <= stop) break;
+    // Pin the worst anchors (all unsettled ones after a few rounds), then let the others
+    // settle again around them. Each round pins at least one, so this ends.
+    const double pin_above = round < 8 ? std::max(stop, 0.1 * largest) : stop;
+    for (Index c = 0; c < c_count; ++c)
+      if (!pinned[c] && moves[c] > pin_above) {
+        pinned[c] = 1;
+        ++out.pinned;
+        level.row(support.anchors[c]) = fine.row(support.anchors[c]);
+      }
+    std::fill(damping.begin(), damping.end(), 1.0);
+    std::fill(moves.begin(), moves.end(), std::numeric_limits<double>::infinity());
+  }
+  const Points normals = level_normals(level, support, reference);
+  std::vector<unsigned char> is_anchor(static_cast<std::size_t>(level.rows()), 0);
+  for (Index a : support.anchors) is_anchor[a] = 1;
+  parallel_for(static_cast<std::size_t>(level.rows()), [&](std::size_t b, std::size_t e) {
+    for (std::size_t ii = b; ii < e; ++ii) {
+      if (is_anchor[ii]) continue;
+      const Eigen::Index i = static_cast<Eigen::Index>(ii);
+      const Vec3 nrm = normals.row(i).transpose();
+      const Vec3 f = fine.row(i).transpose();
+      level.row(i) = (f - (f - level.row(i).transpose()).dot(nrm) * nrm).transpose();
+    }
+  });
+  stage.report(1.0);
+  return out;
+}
+
+}  // namespace
+
+MultiscaleModel decompose(const Points& points, const Points* input_normals, const DecomposeOptions& options,
+                          const ProgressCallback* progress) {
+  const Eigen::Index n = points.rows();
+  const int k = options.levels - 1;
+  const double scale = (points.colwise().maxCoeff() - points.colwise().minCoeff()).norm();
+  const ProgressStage all{progress, 0.0, 1.0};
+  const int kk = options.mls.neighbors;
+
+  MultiscaleModel model;
+  model.support.resize(k);
+  model.reports.resize(k);
+  std::vector<Points> levels(k + 1);
+  levels[k] = points;
+
+  for (int step = 0; step < k; ++step) {
+    const int l = k - step;  // builds level l-1 from level l
+    const ProgressStage stage = all.sub(static_cast<double>(step) / (k + 0.2), static_cast<double>(step + 1) / (k + 0.2));
+    const Points& fine = levels[l];
+    stage.report(0.0);
+
+    // Decimate P^l to Q^{l-1}: |Q^{l-1}| = gamma^(step+1) n (Sec. 5.2).
+    const auto target = static_cast<std::size_t>(std::floor(std::pow(options.decimation, step + 1) * n));
+    Clustering clusters = cluster_decimate(fine, target, options.max_variation);
+    stage.report(0.05);
+    SpatialIndex q_index(clusters.centroids);
+    const Eigen::VectorXd h = options.kernel * local_spacing(q_index, 6);
+
+    // Project P^l onto the MLS surface of Q^{l-1}.
+    MlsResult projected = mls_project(fine, q_index, h, options.mls, stage.sub(0.1, 0.8));
+
+    // The level's own support: clusters, their neighbourhoods and kernels.
+    LevelSupport& support = model.support[l - 1];
+    support.labels = std::move(clusters.labels);
+    support.clusters = static_cast<Index>(clusters.centroids.rows());
+    support.neighbors = std::min<int>(kk, support.clusters);
+    support.h = h;
+    choose_anchors(fine, projected.positions, support);
+    const Points centroids = support_centroids(projected.positions, support);
+    support.neighborhoods = knn_graph(SpatialIndex(centroids), support.neighbors);
+    attach_frames(centroids, projected.positions, support);
+
+    levels[l - 1] = std::move(projected.positions);
+    const Consistency consistency = make_offsets_normal(fine, levels[l - 1], support, projected.normals, scale,
+                                                        options.consistency_iterations, stage.sub(0.8, 1.0));
+    LevelReport& report = model.reports[l - 1];
+    report.support_points = static_cast<std::size_t>(support.clusters);
+    report.kernel_width = median(h);
+    report.not_converged = projected.not_converged;
+    report.degenerate = projected.degenerate;
+    report.consistency_iterations = consistency.iterations;
+    report.consistency_residual = consistency.residual;
+    report.pinned = consistency.pinned;
+  }
+
+  // Orientation: level 0 from the input normals, or by propagation over the level-0 clusters;
+  // every finer level agrees with the level below it at the same point (as reconstruction does).
+  const ProgressStage last = all.sub(k / (k + 0.2), 1.0);
+  const LevelSupport& s0 = model.support[0];
+  Points reference0(n, 3);
+  if (input_normals) {
+    reference0 = *input_normals;
+  } else {
+    const Points c0 = support_centroids(levels[0], s0);
+    std::vector<Index> own(static_cast<std::size_t>(s0.clusters));
+    for (Index c = 0; c < s0.clusters; ++c) own[c] = c;
+    Points cn = support_normals(c0, own.data(), c0, s0, Points::Zero(s0.clusters, 3));
+    orient_normals(SpatialIndex(c0), cn, std::min<int>(16, s0.clusters));
+    for (Eigen::Index i = 0; i < n; ++i) reference0.row(i) = cn.row(s0.labels[i]);
+  }
+  last.report(0.5);
+  model.details.resize(k, n);
+  Points reference = reference0;
+  for (int l = 0; l < k; ++l) {
+    const LevelSupport& s = model.support[l];
+    Points normals = level_normals(levels[l], s, reference);
+    for (Eigen::Index i = 0; i < n; ++i) model.details(l, i) = (levels[l + 1].row(i) - levels[l].row(i)).dot(normals.row(i));
+    if (l == 0) model.base_normals = normals;
+    reference = std::move(normals);
+  }
+  model.base = std::move(levels[0]);
+  last.report(1.0);
+  return model;
+}
+
+}  // namespace pointscale

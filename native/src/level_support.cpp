@@ -1,0 +1,178 @@
+#include "pointscale/level_support.h"
+
+#include <Eigen/LU>
+#include <cmath>
+#include <limits>
+
+#include "pointscale/parallel.h"
+#include "pointscale/plane_fit.h"
+
+namespace pointscale {
+
+Points support_centroids(const Points& level, const LevelSupport& support) {
+  Points out(support.clusters, 3);
+  for (Index c = 0; c < support.clusters; ++c) out.row(c) = level.row(support.anchors[c]);
+  return out;
+}
+
+void choose_anchors(const Points& fine, const Points& level, LevelSupport& support) {
+  support.anchors.assign(static_cast<std::size_t>(support.clusters), -1);
+  std::vector<double> best(static_cast<std::size_t>(support.clusters), std::numeric_limits<double>::infinity());
+  for (Eigen::Index i = 0; i < level.rows(); ++i) {
+    const Index c = support.labels[i];
+    const double d = (fine.row(i) - level.row(i)).squaredNorm();
+    if (d < best[c]) { best[c] = d; support.anchors[c] = static_cast<Index>(i); }
+  }
+}
+
+Points support_normals(const Points& query, const Index* query_labels, const Points& centroids,
+                       const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
+  const Eigen::Index n = query.rows();
+  const int k = support.neighbors;
+  Points normals(n, 3);
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+    std::vector<double> d2(k), ih2(k), w(k);
+    for (std::size_t ii = b; ii < e; ++ii) {
+      const Eigen::Index i = static_cast<Eigen::Index>(ii);
+      const Vec3 x = query.row(i).transpose();
+      const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(query_labels[i]) * k;
+      for (int j = 0; j < k; ++j) {
+        d2[j] = (centroids.row(nb[j]).transpose() - x).squaredNorm();
+        const double h = support.h(nb[j]);
+        ih2[j] = 1.0 / (h * h);
+      }
+      gaussian_weights(d2.data(), ih2.data(), k, w.data());
+      const PlaneFit fit = fit_weighted_plane(centroids, nb, w.data(), k, x);
+      const Vec3 ref = reference.row(i).transpose();
+      Vec3 nrm = fit.ok ? fit.normal : ref.normalized();
+      if (!fit.ok && !(ref.squaredNorm() > 0)) nrm = Vec3::UnitZ();
+      if (nrm.dot(ref) < 0.0) nrm = -nrm;
+      normals.row(i) = nrm.transpose();
+    }
+  }, stage, 512);
+  return normals;
+}
+
+namespace {
+
+// Orthonormal frame of cluster c: origin, then columns t1, t2, t1 x t2.
+Mat3 cluster_frame(const Points& centroids, const LevelSupport& support, Index c) {
+  const Index a = support.frames[2 * static_cast<std::size_t>(c)];
+  const Index b = support.frames[2 * static_cast<std::size_t>(c) + 1];
+  const Vec3 o = centroids.row(c).transpose();
+  Vec3 t1 = centroids.row(a).transpose() - o;
+  Vec3 t2 = centroids.row(b).transpose() - o;
+  if (a == c || b == c || !(t1.norm() > 0)) return Mat3::Identity();
+  t1.normalize();
+  t2 -= t2.dot(t1) * t1;
+  if (!(t2.norm() > 1e-12 * (centroids.row(b).transpose() - o).norm())) return Mat3::Identity();
+  t2.normalize();
+  Mat3 f;
+  f << t1, t2, t1.cross(t2);
+  return f;
+}
+
+}  // namespace
+
+void attach_frames(const Points& centroids, const Points& positions, LevelSupport& support) {
+  const int k = support.neighbors;
+  support.frames.assign(2 * static_cast<std::size_t>(support.clusters), 0);
+  for (Index c = 0; c < support.clusters; ++c) {
+    const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(c) * k;
+    const Vec3 o = centroids.row(c).transpose();
+    Index a = c, b = c;
+    Vec3 t1 = Vec3::Zero();
+    for (int j = 1; j < k && a == c; ++j) {
+      const Vec3 e = centroids.row(nb[j]).transpose() - o;
+      if (e.norm() > 0) { a = nb[j]; t1 = e.normalized(); }
+    }
+    double best = 0.0;
+    for (int j = 1; j < k && a != c; ++j) {
+      const Vec3 e = centroids.row(nb[j]).transpose() - o;
+      const double len = e.norm();
+      if (!(len > 0) || nb[j] == a) continue;
+      const double ortho = (e - e.dot(t1) * t1).norm() / len;  // sine of the angle to t1
+      if (ortho > best + 1e-9) { best = ortho; b = nb[j]; }
+      if (best > 0.7) break;  // well spread: keep the nearest such neighbour
+    }
+    support.frames[2 * static_cast<std::size_t>(c)] = a;
+    support.frames[2 * static_cast<std::size_t>(c) + 1] = b;
+  }
+  support.local.resize(positions.rows(), 3);
+  parallel_for(static_cast<std::size_t>(positions.rows()), [&](std::size_t b, std::size_t e) {
+    for (std::size_t ii = b; ii < e; ++ii) {
+      const Eigen::Index i = static_cast<Eigen::Index>(ii);
+      const Index c = support.labels[i];
+      const Mat3 f = cluster_frame(centroids, support, c);
+      support.local.row(i) = (f.transpose() * (positions.row(i) - centroids.row(c)).transpose()).transpose();
+    }
+  }, {}, 4096);
+}
+
+Points frame_positions(const Points& centroids, const LevelSupport& support) {
+  std::vector<Mat3> frames(static_cast<std::size_t>(support.clusters));
+  parallel_for(frames.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t c = b; c < e; ++c) frames[c] = cluster_frame(centroids, support, static_cast<Index>(c));
+  }, {}, 4096);
+  Points query(support.local.rows(), 3);
+  parallel_for(static_cast<std::size_t>(query.rows()), [&](std::size_t b, std::size_t e) {
+    for (std::size_t ii = b; ii < e; ++ii) {
+      const Eigen::Index i = static_cast<Eigen::Index>(ii);
+      const Index c = support.labels[i];
+      query.row(i) = centroids.row(c) + (frames[c] * support.local.row(i).transpose()).transpose();
+    }
+  }, {}, 4096);
+  return query;
+}
+
+Points level_normals(const Points& level, const LevelSupport& support, const Points& reference,
+                     const ProgressStage& stage) {
+  const Points centroids = support_centroids(level, support);
+  const Points query = frame_positions(centroids, support);
+  return support_normals(query, support.labels.data(), centroids, support, reference, stage);
+}
+
+Points transported_references(const Points& original, const Points& edited, const Points& original_normals,
+                              const LevelSupport& support) {
+  const Points b0 = support_centroids(original, support);
+  const Points b1 = support_centroids(edited, support);
+  // Oriented normal of each cluster: the mean of its points' oriented normals.
+  Points nc = Points::Zero(support.clusters, 3);
+  for (Eigen::Index i = 0; i < original.rows(); ++i) nc.row(support.labels[i]) += original_normals.row(i);
+  const int k = support.neighbors;
+  Points ref_c(support.clusters, 3);
+  parallel_for(static_cast<std::size_t>(support.clusters), [&](std::size_t b, std::size_t e) {
+    for (std::size_t cc = b; cc < e; ++cc) {
+      const Index c = static_cast<Index>(cc);
+      Vec3 n = nc.row(c).transpose();
+      if (!(n.norm() > 0)) n = Vec3::UnitZ();
+      n.normalize();
+      const Vec3 t1 = n.unitOrthogonal();
+      const Vec3 t2 = n.cross(t1);  // t1 x t2 = n
+      Eigen::Matrix<double, 3, 2> a = Eigen::Matrix<double, 3, 2>::Zero();
+      Eigen::Matrix2d m = Eigen::Matrix2d::Zero();
+      const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(c) * k;
+      for (int j = 1; j < k; ++j) {
+        const Vec3 e0 = (b0.row(nb[j]) - b0.row(c)).transpose();
+        const Vec3 e1 = (b1.row(nb[j]) - b1.row(c)).transpose();
+        const double h = support.h(c);
+        const double w = std::exp(-e0.squaredNorm() / (h * h));
+        const Eigen::Vector2d u(t1.dot(e0), t2.dot(e0));
+        a.noalias() += w * e1 * u.transpose();
+        m.noalias() += w * u * u.transpose();
+      }
+      Vec3 r = n;
+      if (std::abs(m.determinant()) > 1e-12 * m.trace() * m.trace()) {
+        const Eigen::Matrix<double, 3, 2> f = a * m.inverse();
+        const Vec3 cross = f.col(0).cross(f.col(1));
+        if (cross.norm() > 0) r = cross.normalized();
+      }
+      ref_c.row(c) = r.transpose();
+    }
+  });
+  Points ref(original.rows(), 3);
+  for (Eigen::Index i = 0; i < original.rows(); ++i) ref.row(i) = ref_c.row(support.labels[i]);
+  return ref;
+}
+
+}  // namespace pointscale

@@ -1,0 +1,57 @@
+#include "pointscale/mls_projection.h"
+
+#include <cmath>
+#include <limits>
+
+#include "pointscale/parallel.h"
+#include "pointscale/plane_fit.h"
+
+namespace pointscale {
+
+MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen::VectorXd& h,
+                      const MlsOptions& options, const ProgressStage& stage) {
+  const Eigen::Index n = x.rows();
+  const int k = std::min<int>(options.neighbors, support.size());
+  const Points& s = support.points();
+  const Eigen::VectorXd inv_h2 = h.array().square().inverse();
+  MlsResult out;
+  out.positions.resize(n, 3);
+  out.normals.resize(n, 3);
+  std::vector<unsigned char> failed(n, 0), degenerate(n, 0);
+
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+    std::vector<Index> idx(k);
+    std::vector<double> d2(k), ih2(k), w(k);
+    for (std::size_t i = b; i < e; ++i) {
+      const Vec3 p = x.row(static_cast<Eigen::Index>(i)).transpose();
+      Vec3 foot = p;
+      Vec3 normal = Vec3::Zero();
+      bool converged = false, ok = false;
+      double last_step = std::numeric_limits<double>::infinity(), damping = 1.0;
+      for (int it = 0; it < options.max_iterations; ++it) {
+        const int found = support.knn(foot.data(), k, idx.data(), d2.data());
+        for (int j = 0; j < found; ++j) ih2[j] = inv_h2(idx[j]);
+        gaussian_weights(d2.data(), ih2.data(), found, w.data());
+        const PlaneFit fit = fit_weighted_plane(s, idx.data(), w.data(), found, foot);
+        if (!fit.ok) break;
+        ok = true;
+        normal = fit.normal;
+        const Vec3 next = p - (p - fit.mean).dot(normal) * normal;
+        const double step = (next - foot).norm();
+        // Near sharp features the foot point can swing back and forth: damp a growing step.
+        if (step > last_step) damping = std::max(damping * 0.5, 1.0 / 64.0);
+        last_step = step;
+        foot += damping * (next - foot);
+        if (step <= options.tolerance * h(idx[0])) { converged = true; break; }
+      }
+      out.positions.row(static_cast<Eigen::Index>(i)) = foot.transpose();
+      out.normals.row(static_cast<Eigen::Index>(i)) = normal.transpose();
+      if (!ok) degenerate[i] = 1;
+      else if (!converged) failed[i] = 1;
+    }
+  }, stage, 128);
+  for (Eigen::Index i = 0; i < n; ++i) { out.not_converged += failed[i]; out.degenerate += degenerate[i]; }
+  return out;
+}
+
+}  // namespace pointscale

@@ -1,0 +1,76 @@
+#include "pointscale/normal_estimation.h"
+
+#include <cmath>
+#include <queue>
+
+#include "pointscale/parallel.h"
+#include "pointscale/plane_fit.h"
+
+namespace pointscale {
+
+Points pca_normals(const SpatialIndex& index, int k, const ProgressStage& stage) {
+  const Index n = index.size();
+  k = std::min<int>(k, n);
+  Points normals(n, 3);
+  const Points& p = index.points();
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+    std::vector<Index> idx(k);
+    std::vector<double> d2(k), w(k, 1.0);
+    for (std::size_t i = b; i < e; ++i) {
+      const Vec3 x = p.row(static_cast<Eigen::Index>(i)).transpose();
+      const int found = index.knn(x.data(), k, idx.data(), d2.data());
+      const PlaneFit fit = fit_weighted_plane(p, idx.data(), w.data(), found, x);
+      normals.row(static_cast<Eigen::Index>(i)) = (fit.ok ? fit.normal : Vec3(Vec3::Zero())).transpose();
+    }
+  }, stage);
+  return normals;
+}
+
+void orient_normals(const SpatialIndex& index, Points& normals, int k) {
+  const Index n = index.size();
+  if (n == 0) return;
+  const IndexList graph = knn_graph(index, k);
+  k = static_cast<int>(graph.size() / n);
+  const Points& p = index.points();
+  const Vec3 centre = p.colwise().mean().transpose();
+  // Seeds in order of decreasing distance from the centroid.
+  std::vector<Index> order(n);
+  Eigen::VectorXd dist(n);
+  for (Index i = 0; i < n; ++i) { order[i] = i; dist(i) = (p.row(i).transpose() - centre).squaredNorm(); }
+  std::sort(order.begin(), order.end(), [&](Index a, Index b) { return dist(a) > dist(b); });
+
+  // Symmetric adjacency, so that propagation can cross edges found from either side.
+  std::vector<std::vector<Index>> adj(n);
+  for (Index i = 0; i < n; ++i)
+    for (int j = 1; j < k; ++j) {
+      const Index o = graph[static_cast<std::size_t>(i) * k + j];
+      if (o == i) continue;
+      adj[i].push_back(o);
+      adj[o].push_back(i);
+    }
+
+  std::vector<unsigned char> visited(n, 0);
+  using Item = std::pair<double, std::pair<Index, Index>>;  // (cost, (from, to))
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
+  auto visit = [&](Index i) {
+    visited[i] = 1;
+    for (Index o : adj[i])
+      if (!visited[o]) heap.push({1.0 - std::abs(normals.row(i).dot(normals.row(o))), {i, o}});
+  };
+  for (Index seed : order) {
+    if (visited[seed]) continue;
+    const Vec3 out = p.row(seed).transpose() - centre;
+    if (normals.row(seed).dot(out) < 0.0) normals.row(seed) *= -1.0;
+    visit(seed);
+    while (!heap.empty()) {
+      const auto [cost, edge] = heap.top();
+      heap.pop();
+      const auto [from, to] = edge;
+      if (visited[to]) continue;
+      if (normals.row(from).dot(normals.row(to)) < 0.0) normals.row(to) *= -1.0;
+      visit(to);
+    }
+  }
+}
+
+}  // namespace pointscale

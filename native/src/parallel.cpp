@@ -1,0 +1,80 @@
+#include "pointscale/parallel.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace pointscale {
+
+namespace {
+std::atomic<int> configured_threads{0};
+}
+
+void set_thread_count(int threads) { configured_threads = std::max(0, threads); }
+
+int thread_count() {
+  int t = configured_threads.load();
+  if (t > 0) return t;
+  return std::max(1u, std::thread::hardware_concurrency());
+}
+
+void parallel_for(std::size_t n, const std::function<void(std::size_t, std::size_t)>& body,
+                  const ProgressStage& stage, std::size_t chunk) {
+  if (n == 0) return;
+  chunk = std::max<std::size_t>(1, chunk);
+  const std::size_t n_chunks = (n + chunk - 1) / chunk;
+  const int n_threads = static_cast<int>(std::min<std::size_t>(thread_count(), n_chunks));
+
+  std::atomic<std::size_t> next{0};
+  std::atomic<std::size_t> done{0};
+  std::atomic<bool> stop{false};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+
+  auto work_one = [&]() -> bool {
+    if (stop.load(std::memory_order_relaxed)) return false;
+    std::size_t c = next.fetch_add(1);
+    if (c >= n_chunks) return false;
+    std::size_t b = c * chunk, e = std::min(n, b + chunk);
+    try {
+      body(b, e);
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      if (!error) error = std::current_exception();
+      stop = true;
+      return false;
+    }
+    done.fetch_add(e - b);
+    return true;
+  };
+
+  std::vector<std::thread> workers;
+  workers.reserve(n_threads - 1);
+  for (int t = 1; t < n_threads; ++t)
+    workers.emplace_back([&] { while (work_one()) {} });
+
+  // The calling thread works and is the only one that talks to the progress callback.
+  auto last = std::chrono::steady_clock::now();
+  while (work_one()) {
+    auto now = std::chrono::steady_clock::now();
+    if (stage.callback && now - last > std::chrono::milliseconds(50)) {
+      last = now;
+      try {
+        stage.report(static_cast<double>(done.load()) / static_cast<double>(n));
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+        stop = true;
+      }
+    }
+  }
+  for (auto& w : workers) w.join();
+  if (error) std::rethrow_exception(error);
+  stage.report(1.0);
+}
+
+}  // namespace pointscale
