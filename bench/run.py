@@ -98,6 +98,22 @@ def bumpy_sphere(n: int, seed: int = 1) -> np.ndarray:
     return out.astype(np.float32).astype(np.float64)
 
 
+def morton_order(points: np.ndarray) -> np.ndarray:
+    """Indices sorting points along a 3D Z-order curve (10 bits per axis)."""
+    lo = points.min(axis=0)
+    extent = float((points.max(axis=0) - lo).max()) or 1.0
+    q = np.clip(((points - lo) / extent * 1023.0).astype(np.uint64), 0, 1023)
+
+    def spread(v):
+        v = (v | (v << np.uint64(16))) & np.uint64(0x30000FF)
+        v = (v | (v << np.uint64(8))) & np.uint64(0x300F00F)
+        v = (v | (v << np.uint64(4))) & np.uint64(0x30C30C3)
+        return (v | (v << np.uint64(2))) & np.uint64(0x9249249)
+
+    code = spread(q[:, 0]) | (spread(q[:, 1]) << np.uint64(1)) | (spread(q[:, 2]) << np.uint64(2))
+    return np.argsort(code, kind="stable")
+
+
 def read_ply_xyz(path: Path) -> np.ndarray:
     from plyfile import PlyData
 
@@ -324,6 +340,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--sizes", type=lambda s: [parse_size(x) for x in s.split(",") if x.strip()],
                    help="comma-separated synthetic sizes, e.g. 100k,1M (default 100k,1M)")
     p.add_argument("--huge", action="store_true", help="also decompose a 10M-point synthetic cloud")
+    p.add_argument("--morton", action="store_true",
+                   help="feed both sides the synthetic clouds in Morton order instead of random order")
     p.add_argument("--no-pcl", action="store_true", help="skip the PCL peer")
     p.add_argument("--no-pointscale", action="store_true", help="skip pointscale (PCL only)")
     p.add_argument("--no-data", action="store_true", help="skip the real scans")
@@ -385,7 +403,9 @@ def main(argv: list[str] | None = None) -> int:
             print("PCL peer:", peer.relative_to(REPO))
     print(flush=True)
 
-    inputs: list[tuple[str, str, object]] = [("synthetic", f"bumpy sphere {size_label(n)}", n) for n in sizes]
+    order = "Morton order" if args.morton else "random order"
+    inputs: list[tuple[str, str, object]] = [
+        ("synthetic", f"bumpy sphere {size_label(n)} ({order})", n) for n in sizes]
     if not (args.no_data or args.quick):
         for name in DATASETS:
             path = args.data_dir / name
@@ -400,6 +420,8 @@ def main(argv: list[str] | None = None) -> int:
         for kind, name, src in inputs:
             t0 = time.perf_counter()
             pts = bumpy_sphere(src) if kind == "synthetic" else read_ply_xyz(src)
+            if kind == "synthetic" and args.morton:
+                pts = pts[morton_order(pts)]
             n = len(pts)
             f32 = tmp / "cloud.f32"
             npy = tmp / "cloud.npy"
