@@ -310,6 +310,19 @@ def verdicts(rows: list[dict]) -> list[str]:
     return lines
 
 
+def core_revision() -> str:
+    """HEAD of the repo and whether native/ differs from it (the core being measured)."""
+    try:
+        head = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"],
+                              capture_output=True, text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(REPO), "status", "--porcelain", "--", "native",
+                                "CMakeLists.txt", "pyproject.toml"],
+                               capture_output=True, text=True, check=True).stdout.strip()
+        return head + (" (native/ has uncommitted changes)" if dirty else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
 def machine_line() -> str:
     model = "unknown CPU"
     try:
@@ -387,7 +400,7 @@ def main(argv: list[str] | None = None) -> int:
                               "pointscale.__file__)"], capture_output=True, text=True)
         if chk.returncode == 0:
             have_ps = True
-            print("pointscale:", chk.stdout.strip())
+            print("pointscale:", chk.stdout.strip(), "| repo HEAD", core_revision())
         else:
             ps_why = "pointscale not importable (pip install -e . in the repo root)"
             print("pointscale: NOT IMPORTABLE -", (chk.stderr.strip().splitlines() or ["?"])[-1])
