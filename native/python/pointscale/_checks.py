@@ -42,9 +42,10 @@ def require_surface(points: np.ndarray, name: str = "points", allow_planar: bool
     spread = extent_eigenvalues(points)
     if spread[0] == 0.0:
         raise ValueError(f"all {name} are identical: they define no surface")
-    if spread[1] <= 1e-9 * spread[0]:
+    # Rounding leaves eigenvalues near 1e-16 of the largest, so spreads below 1e-6 count as zero.
+    if spread[1] <= 1e-6 * spread[0]:
         raise ValueError(f"{name} are collinear: they define no surface and no normals")
-    if not allow_planar and spread[2] <= 1e-9 * spread[0]:
+    if not allow_planar and spread[2] <= 1e-6 * spread[0]:
         raise ValueError(f"{name} all lie in one plane: there is no detail to separate from a base "
                          "(use project() to work with planar data)")
 

@@ -103,9 +103,10 @@ def load(path) -> Decomposition:
     """Reads a file written by Decomposition.save."""
     try:
         with np.load(os.fspath(path), allow_pickle=False) as f:
-            return Decomposition.from_dict(dict(f))
-    except (OSError, EOFError) as exc:
+            arrays = dict(f)
+    except (OSError, EOFError, ValueError) as exc:
         raise ValueError(f"cannot read decomposition {path!s}: {exc}") from None
+    return Decomposition.from_dict(arrays)
 
 
 def _level_index(l, count: int) -> int:

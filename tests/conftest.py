@@ -1,0 +1,19 @@
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+SHARED_DATA = Path(os.environ.get("POINTSCALE_DATA", Path(__file__).resolve().parents[1] / ".." / "shared" / "data"))
+
+
+def diagonal(points: np.ndarray) -> float:
+    return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+
+
+def shared_model(name: str) -> Path:
+    """A scanned model from ../shared/data; skips the test when the folder is absent (a user's clone)."""
+    path = SHARED_DATA / name
+    if not path.exists():
+        pytest.skip(f"{name} not found in {SHARED_DATA} (only CI and developers have ../shared/data)")
+    return path

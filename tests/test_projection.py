@@ -1,0 +1,53 @@
+"""The MLS projection operator Psi (Sec. 2) and the decimation (Sec. 5.2)."""
+import numpy as np
+
+import pointscale as ps
+
+
+def test_points_on_a_plane_project_onto_themselves():
+    rng = np.random.default_rng(1)
+    xy = rng.uniform(-1, 1, (5000, 2))
+    a, b = np.array([1.0, 0.3, -0.2]), np.array([0.2, -1.0, 0.5])
+    plane = xy[:, :1] * a + xy[:, 1:] * b + np.array([3.0, -2.0, 7.0])
+    pos, nrm = ps.project(plane[:500], plane)
+    rel = np.abs(pos - plane[:500]).max() / np.linalg.norm(plane.max(0) - plane.min(0))
+    assert rel < 1e-9, rel
+    n = np.cross(a, b) / np.linalg.norm(np.cross(a, b))
+    assert np.allclose(np.abs(nrm @ n), 1.0, atol=1e-9)
+
+
+def test_dense_sphere_projects_within_one_percent_of_its_radius():
+    surface = ps.shapes.sphere(40000, radius=2.0)
+    rng = np.random.default_rng(2)
+    off = ps.shapes.sphere(2000, radius=2.0) * (1 + rng.uniform(-0.02, 0.02, (2000, 1)))
+    pos, nrm, report = ps.project(off, surface, return_report=True)
+    r = np.linalg.norm(pos, axis=1)
+    assert np.abs(r - 2.0).max() < 0.02, np.abs(r - 2.0).max()
+    assert report["not_converged"] == 0 and report["degenerate"] == 0
+    radial = pos / r[:, None]
+    assert np.abs(np.einsum("ij,ij->i", nrm, radial)).min() > 0.999
+
+
+def test_decimation_hits_the_target_and_labels_every_point():
+    points = ps.shapes.bumpy_sphere(20000)
+    centroids, labels = ps.decimate(points, 1234)
+    assert centroids.shape == (1234, 3) and labels.shape == (20000,)
+    assert set(np.unique(labels)) == set(range(1234))
+    # Each centroid is the mean of its cluster.
+    sums = np.zeros_like(centroids)
+    np.add.at(sums, labels, points)
+    assert np.allclose(sums / np.bincount(labels)[:, None], centroids, atol=1e-12)
+
+
+def test_decomposition_levels_follow_the_geometric_series():
+    points = ps.shapes.bumpy_sphere(20000)
+    dec = ps.decompose(points, levels=4, decimation=0.3)
+    sizes = [s["support_points"] for s in dec.stats]  # level 0 first
+    assert sizes == [int(20000 * 0.3**3), int(20000 * 0.3**2), int(20000 * 0.3)]
+
+
+def test_estimated_normals_point_outward_on_a_closed_shape():
+    points = ps.shapes.bumpy_sphere(10000, coarse=0.05)
+    n = ps.estimate_normals(points)
+    assert np.allclose(np.linalg.norm(n, axis=1), 1.0)
+    assert (np.einsum("ij,ij->i", n, points) > 0).all()

@@ -1,0 +1,74 @@
+"""The core releases the GIL, uses every core, and can be cancelled cleanly."""
+import os
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import pointscale as ps
+
+
+@pytest.fixture(scope="module")
+def big():
+    return ps.shapes.bumpy_sphere(300000, noise=0.001)
+
+
+def test_python_keeps_running_during_a_decompose(big):
+    ticks = []
+    stop = threading.Event()
+
+    def ticker():
+        while not stop.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.005)
+
+    t = threading.Thread(target=ticker)
+    t.start()
+    start = time.perf_counter()
+    ps.decompose(big, levels=3)
+    elapsed = time.perf_counter() - start
+    stop.set()
+    t.join()
+    during = [x for x in ticks if start <= x <= start + elapsed]
+    # With the GIL held the ticker would stall for the whole call.
+    assert len(during) > 0.3 * elapsed / 0.005, (len(during), elapsed)
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="needs two cores")
+def test_both_cores_are_used(big):
+    surface = big[::3]
+    wall = time.perf_counter()
+    cpu = time.process_time()
+    ps.project(big, surface, threads=0)  # the projection is the bulk of a decompose
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    assert cpu > 1.5 * wall, (cpu, wall)
+
+
+def test_progress_reports_and_cancel_stops_cleanly(big):
+    seen = []
+    ps.decompose(big[:50000], levels=3, progress=lambda f: seen.append(f) or True)
+    assert seen and seen[-1] == pytest.approx(1.0) and all(0 <= f <= 1 for f in seen)
+    assert seen == sorted(seen)
+
+    calls = []
+
+    def cancel_soon(f):
+        calls.append(f)
+        return f < 0.2
+
+    start = time.perf_counter()
+    with pytest.raises(ps.Cancelled):
+        ps.decompose(big, levels=3, progress=cancel_soon)
+    assert max(calls) < 0.5  # stopped early, not at the end
+    # Nothing half-written stays behind: a new run works and gives the exact result.
+    dec = ps.decompose(big[:50000], levels=3)
+    assert np.abs(ps.reconstruct(dec) - big[:50000]).max() < 1e-9
+
+
+def test_an_exception_in_the_callback_propagates(big):
+    def boom(f):
+        raise RuntimeError("from the callback")
+
+    with pytest.raises(RuntimeError, match="from the callback"):
+        ps.decompose(big[:50000], levels=3, progress=boom)
