@@ -1,0 +1,86 @@
+"""Engine calls on plain arrays (no bpy): what each operator computes.
+
+Operators read arrays from Blender, call one of these, and write the result.
+bpy scripts can call them directly; they are safe to run in a worker thread.
+"""
+
+from __future__ import annotations
+
+import inspect
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import logic
+
+
+@dataclass
+class Layout:
+    """Everything Decompose writes: the engine object, levels P^0..P^{k-1} and their normals."""
+
+    dec: object
+    levels: np.ndarray  # (k, n, 3)
+    normals: np.ndarray  # (k, n, 3)
+
+    @property
+    def k(self) -> int:
+        return self.levels.shape[0]
+
+
+def decompose_kwargs(ps, levels=4, decimation=0.25, kernel=1.0, neighbors=24, threads=0,
+                     smoother="MLS", encoding="PROJECTION") -> dict:
+    """Keyword arguments for ``ps.decompose``; optional methods only when the engine has them."""
+    kw = dict(levels=int(levels), decimation=float(decimation), kernel=float(kernel),
+              neighbors=int(neighbors), threads=int(threads))
+    params = inspect.signature(ps.decompose).parameters
+    for name, value, default in (("smoother", smoother, "MLS"), ("encoding", encoding, "PROJECTION")):
+        if value == default:
+            continue
+        if name not in params:
+            raise ValueError(f"this pointscale engine has no '{name}' option yet ({value.lower()} is unavailable)")
+        kw[name] = {"DIFFUSION": "diffusion", "RAY": "ray"}.get(value, value.lower())
+    return kw
+
+
+def decompose(ps, points: np.ndarray, progress=None, **kwargs) -> Layout:
+    """Decompose (n,3) points and extract the levels and normals the keys need."""
+    problem = logic.check_points(points)
+    if problem:
+        raise ValueError(problem)
+    dec = ps.decompose(np.asarray(points, dtype=np.float64), progress=progress, **kwargs)
+    k = dec.n_bands
+    levels = np.stack([dec.level(l) for l in range(k)])
+    normals = np.stack([dec.normals(l) for l in range(k)])
+    return Layout(dec, levels, normals)
+
+
+def rebuild(ps, dec, base: np.ndarray, gains=None) -> np.ndarray:
+    """Full detail on an edited base P^0, normals recomputed per level (Sec. 8.1)."""
+    return ps.reconstruct(dec, gains=gains, base=np.asarray(base, dtype=np.float64))
+
+
+def bake(ps, dec, base: np.ndarray, band_values, mask_weights) -> np.ndarray:
+    """Exact recursive reconstruction of the current band gains (with painted masks)."""
+    gains = logic.per_point_gains(band_values, mask_weights, dec.n_points)
+    return ps.reconstruct(dec, gains=gains, base=np.asarray(base, dtype=np.float64))
+
+
+def morph_keys(ps, a: np.ndarray, b: np.ndarray, base_points: np.ndarray | None = None, samples: int = 40000):
+    """Eq. 22 as three arrays: (projected A, A + alpha detail at (1,0), at (0,1)).
+
+    p(alpha, beta) is linear in alpha and beta, so Blender's relative keys
+    ``A detail`` = p(1,0) and ``B detail`` = p(0,1) over the Basis p(0,0) evaluate it exactly.
+    """
+    if not hasattr(ps, "morph"):
+        raise ValueError("this pointscale engine has no morph() yet")
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    if base_points is None:
+        if hasattr(ps, "ellipsoid_base"):
+            base_points = ps.ellipsoid_base(a, b, n=samples)
+        else:
+            lo = np.minimum(a.min(axis=0), b.min(axis=0))
+            hi = np.maximum(a.max(axis=0), b.max(axis=0))
+            base_points = logic.ellipsoid_points(lo, hi, samples)
+    m = ps.morph(a, b, np.asarray(base_points, dtype=np.float64))
+    return m.evaluate(0.0, 0.0), m.evaluate(1.0, 0.0), m.evaluate(0.0, 1.0)

@@ -1,0 +1,259 @@
+"""Pure-NumPy logic of the Multiscale add-on.
+
+Nothing in here imports ``bpy``: operators gather arrays from Blender, call
+these functions and write the results back.  bpy scripts and tests can call
+them directly.
+
+Conventions (n points, k bands, levels P^0..P^k, P^k = the input):
+
+* ``levels``  (k, n, 3): P^0 .. P^{k-1}, absolute positions (the ``Level l`` keys)
+* ``basis``   (n, 3):    P^k, the original positions (the ``Basis`` key)
+* band l offset = P^{l+1} - P^l, stored in the ``Band l`` key as Basis + offset
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "level_key_values",
+    "band_key_data",
+    "evaluate_keys",
+    "per_point_gains",
+    "gains_from_values",
+    "detail_colors",
+    "split_float64",
+    "join_float64",
+    "pack_decomposition",
+    "unpack_decomposition",
+    "ellipsoid_points",
+    "check_points",
+]
+
+
+# ---------------------------------------------------------------- levels / Scale
+
+def level_key_values(t: float, k: int) -> np.ndarray:
+    """Values of the ``Level 0..k-1`` keys that display the blend P(t), t in [0, k].
+
+    Relative keys add ``v_l * (Level_l - Basis)``.  With hat weights
+    ``v_l = max(0, 1 - |t - l|)`` two neighbouring keys are active, and the
+    result is ``(1 - f) P^l + f P^{l+1}`` with ``l = floor(t)``, ``f = t - l``
+    (``P^k`` is the Basis, whose weight is implicit).  Because
+    ``P^{l+1} - P^l = D^l`` lies along the normal, this is exactly Eq. 20-21.
+    """
+    if k < 1:
+        raise ValueError("need at least one band")
+    t = float(min(max(t, 0.0), float(k)))
+    l = np.arange(k, dtype=np.float64)
+    return np.maximum(0.0, 1.0 - np.abs(t - l))
+
+
+def band_key_data(basis: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """(k, n, 3) data of the ``Band l`` keys: Basis + (P^{l+1} - P^l).
+
+    ``levels`` holds P^0..P^{k-1}; P^k is ``basis``.
+    """
+    basis = np.asarray(basis, dtype=np.float64)
+    levels = np.asarray(levels, dtype=np.float64)
+    upper = np.concatenate([levels[1:], basis[None]], axis=0)
+    return basis[None] + (upper - levels)
+
+
+def evaluate_keys(basis, keys, values, weights=None) -> np.ndarray:
+    """What Blender shows for relative keys: Basis + sum v_l w_l (key_l - Basis).
+
+    ``keys`` (m, n, 3), ``values`` (m,), optional ``weights`` (m, n) (vertex-group
+    masks, None = full).  Used by tests and previews; Blender does this itself.
+    """
+    basis = np.asarray(basis, dtype=np.float64)
+    keys = np.asarray(keys, dtype=np.float64)
+    values = np.asarray(values, dtype=np.float64)
+    out = basis.copy()
+    for m in range(keys.shape[0]):
+        w = values[m] if weights is None or weights[m] is None else values[m] * np.asarray(weights[m])[:, None]
+        out += w * (keys[m] - basis)
+    return out
+
+
+# ---------------------------------------------------------------- gains
+
+def gains_from_values(values) -> np.ndarray:
+    """Band key values (gain - 1) -> gains."""
+    return np.asarray(values, dtype=np.float64) + 1.0
+
+
+def per_point_gains(values, weights, n: int) -> np.ndarray | None:
+    """Gains of the painted-mask filter (Fig. 10b) as the core expects them.
+
+    A band key with value ``v`` and mask weight ``w_i`` shows
+    ``(a_i - 1) = v * w_i``, so the per-point gain is ``1 + v * w_i``.
+    ``weights`` is a list of k arrays (n,) or None (= full mask).
+    Returns (k,) when no mask is partial, else (k, n).
+    """
+    values = np.asarray(values, dtype=np.float64)
+    k = values.shape[0]
+    if weights is None or all(w is None for w in weights):
+        return 1.0 + values
+    g = np.empty((k, n), dtype=np.float64)
+    for l in range(k):
+        w = weights[l]
+        g[l] = 1.0 + values[l] * (1.0 if w is None else np.asarray(w, dtype=np.float64))
+    return g
+
+
+# ---------------------------------------------------------------- display
+
+def detail_colors(details: np.ndarray, scale: float | None = None) -> np.ndarray:
+    """(n, 4) linear RGBA: blue for negative detail, white for zero, red for positive (Fig. 2).
+
+    ``scale`` maps to full saturation; by default the 98th percentile of |d|.
+    """
+    d = np.asarray(details, dtype=np.float64).reshape(-1)
+    if scale is None:
+        a = np.abs(d[np.isfinite(d)])
+        scale = float(np.percentile(a, 98.0)) if a.size else 1.0
+    if not scale > 0.0:
+        scale = 1.0
+    s = np.clip(d / scale, -1.0, 1.0)
+    s = np.where(np.isfinite(s), s, 0.0)
+    rgba = np.ones((d.shape[0], 4), dtype=np.float32)
+    pos = s > 0
+    # red: (1, 1-s, 1-s); blue: (1-|s|, 1-|s|, 1)
+    rgba[pos, 1] = 1.0 - s[pos]
+    rgba[pos, 2] = 1.0 - s[pos]
+    neg = ~pos
+    rgba[neg, 0] = 1.0 + s[neg]
+    rgba[neg, 1] = 1.0 + s[neg]
+    return rgba
+
+
+# ---------------------------------------------------------------- storage
+
+def split_float64(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """float64 -> (hi, lo) float32 with hi + lo == a to ~48 mantissa bits.
+
+    Blender attributes are float32; the pair keeps the decomposition exact
+    enough that a reloaded file reconstructs like the original.
+    """
+    a = np.asarray(a, dtype=np.float64)
+    hi = a.astype(np.float32)
+    lo = (a - hi.astype(np.float64)).astype(np.float32)
+    return hi, lo
+
+
+def join_float64(hi: np.ndarray, lo: np.ndarray) -> np.ndarray:
+    return np.asarray(hi, dtype=np.float64) + np.asarray(lo, dtype=np.float64)
+
+
+def pack_decomposition(d: dict, n: int):
+    """Split ``Decomposition.to_dict()`` into per-vertex columns and the rest.
+
+    Returns ``(columns, extras, meta)``:
+
+    * ``columns``: {attribute-name-suffix: (kind, (n,) array)} with kind
+      ``'FLOAT'`` (float32) or ``'INT'`` (int32); float64 columns are split
+      into ``.hi``/``.lo`` pairs;
+    * ``extras``: {key: 1-D float64 or int array} for arrays whose leading
+      dimension is not n (stored as ID properties);
+    * ``meta``: {key: {"shape", "dtype", "where"}} to rebuild the dict.
+    """
+    columns, extras, meta = {}, {}, {}
+    for key, value in d.items():
+        arr = np.asarray(value)
+        info = {"shape": list(arr.shape), "dtype": arr.dtype.str}
+        per_point = n > 0 and arr.dtype.kind in "fiub" and arr.ndim >= 1
+        transpose = per_point and arr.ndim == 2 and arr.shape[0] != n and arr.shape[1] == n
+        if per_point and (arr.shape[0] == n or transpose):
+            flat = arr.T if transpose else arr.reshape(n, -1)
+            info["where"] = "attr"
+            info["transpose"] = bool(transpose)
+            for j in range(flat.shape[1]):
+                col = flat[:, j]
+                base = f"{key}.{j}"
+                if arr.dtype.kind == "f":
+                    if arr.dtype == np.float64:
+                        hi, lo = split_float64(col)
+                        columns[base + ".hi"] = ("FLOAT", hi)
+                        columns[base + ".lo"] = ("FLOAT", lo)
+                    else:
+                        columns[base] = ("FLOAT", col.astype(np.float32))
+                else:
+                    if arr.dtype.kind == "u" and arr.dtype.itemsize >= 4 and col.size and col.max() > np.iinfo(np.int32).max:
+                        raise ValueError(f"array {key!r} does not fit int32")
+                    columns[base] = ("INT", col.astype(np.int32))
+        else:
+            info["where"] = "prop"
+            if arr.dtype.kind == "f":
+                extras[key] = arr.astype(np.float64).reshape(-1)
+            elif arr.dtype.kind in "iub":
+                extras[key] = arr.astype(np.int64).reshape(-1)
+            else:
+                raise ValueError(f"cannot store array {key!r} of dtype {arr.dtype}")
+        meta[key] = info
+    return columns, extras, meta
+
+
+def unpack_decomposition(columns_get, extras: dict, meta: dict, n: int) -> dict:
+    """Inverse of :func:`pack_decomposition`.
+
+    ``columns_get(name, kind)`` returns the stored (n,) column.
+    """
+    out = {}
+    for key, info in meta.items():
+        shape = tuple(int(s) for s in info["shape"])
+        dtype = np.dtype(info["dtype"])
+        if info["where"] == "attr":
+            transpose = bool(info.get("transpose", False))
+            stored = (shape[1], shape[0]) if transpose else shape
+            m = int(np.prod(stored[1:])) if len(stored) > 1 else 1
+            flat = np.empty((n, m), dtype=np.float64 if dtype.kind == "f" else np.int64)
+            for j in range(m):
+                base = f"{key}.{j}"
+                if dtype.kind == "f":
+                    if dtype == np.float64:
+                        flat[:, j] = join_float64(columns_get(base + ".hi", "FLOAT"), columns_get(base + ".lo", "FLOAT"))
+                    else:
+                        flat[:, j] = columns_get(base, "FLOAT")
+                else:
+                    flat[:, j] = columns_get(base, "INT")
+            flat = flat.astype(dtype)
+            out[key] = np.ascontiguousarray(flat.T) if transpose else flat.reshape(shape)
+        else:
+            out[key] = np.asarray(extras[key]).astype(dtype).reshape(shape)
+    return out
+
+
+# ---------------------------------------------------------------- morph / input
+
+def ellipsoid_points(lo, hi, n: int = 20000) -> np.ndarray:
+    """Points on the largest axis-aligned ellipsoid in the box [lo, hi] (Fig. 8-9 base).
+
+    Fibonacci sampling of the unit sphere, scaled; used only when the engine
+    has no ``ellipsoid_base``.
+    """
+    lo = np.asarray(lo, dtype=np.float64)
+    hi = np.asarray(hi, dtype=np.float64)
+    i = np.arange(n, dtype=np.float64) + 0.5
+    z = 1.0 - 2.0 * i / n
+    r = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    phi = i * np.pi * (3.0 - np.sqrt(5.0))
+    unit = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
+    return (lo + hi) * 0.5 + unit * (hi - lo) * 0.5
+
+
+def check_points(points: np.ndarray, minimum: int = 4) -> str | None:
+    """A clear message when ``points`` cannot be decomposed, else None.
+
+    The engine validates too (ValueError); checking first lets the operator
+    refuse before it starts a worker thread.
+    """
+    p = np.asarray(points)
+    if p.ndim != 2 or p.shape[1] != 3:
+        return f"expected (n, 3) points, got shape {p.shape}"
+    if p.shape[0] < minimum:
+        return f"the mesh has {p.shape[0]} vertices; a decomposition needs at least {minimum}"
+    bad = ~np.isfinite(p).all(axis=1)
+    if bad.any():
+        return f"{int(bad.sum())} vertices have NaN or infinite coordinates (first: index {int(np.argmax(bad))})"
+    return None

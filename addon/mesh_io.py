@@ -1,0 +1,112 @@
+"""Bulk reads and writes between Blender meshes and NumPy (foreach_get/foreach_set only)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _key_seq(kb):
+    # ShapeKey.points (4.1+) is the lightweight accessor; .data is the old one.
+    return kb.points if hasattr(kb, "points") else kb.data
+
+
+def vertex_count(mesh) -> int:
+    return len(mesh.vertices)
+
+
+def read_vertices(mesh) -> np.ndarray:
+    n = len(mesh.vertices)
+    co = np.empty(n * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", co)
+    return co.reshape(n, 3)
+
+
+def write_vertices(mesh, co: np.ndarray) -> None:
+    mesh.vertices.foreach_set("co", np.ascontiguousarray(co, dtype=np.float32).reshape(-1))
+    mesh.update()
+
+
+def read_key(kb) -> np.ndarray:
+    seq = _key_seq(kb)
+    n = len(seq)
+    co = np.empty(n * 3, dtype=np.float32)
+    seq.foreach_get("co", co)
+    return co.reshape(n, 3)
+
+
+def write_key(kb, co: np.ndarray) -> None:
+    _key_seq(kb).foreach_set("co", np.ascontiguousarray(co, dtype=np.float32).reshape(-1))
+
+
+def read_basis(mesh) -> np.ndarray:
+    """The reference (Basis) positions: the reference key if any, else the vertices."""
+    if mesh.shape_keys is not None and mesh.shape_keys.reference_key is not None:
+        return read_key(mesh.shape_keys.reference_key)
+    return read_vertices(mesh)
+
+
+def read_evaluated(obj, depsgraph) -> np.ndarray:
+    """Positions of the evaluated mesh (shape keys, masks and modifiers applied)."""
+    ev = obj.evaluated_get(depsgraph)
+    me = ev.to_mesh()
+    try:
+        return read_vertices(me)
+    finally:
+        ev.to_mesh_clear()
+
+
+def read_group_weights(obj, group_names, n: int) -> list:
+    """Weights (n,) per named vertex group, None where the group does not exist.
+
+    Vertex groups have no bulk reader, so this walks the vertices once; call
+    it once per operator, never per frame.
+    """
+    wanted = {}
+    out = []
+    for name in group_names:
+        vg = obj.vertex_groups.get(name) if name else None
+        if vg is None:
+            out.append(None)
+        else:
+            w = np.zeros(n, dtype=np.float64)
+            wanted[vg.index] = w
+            out.append(w)
+    if wanted:
+        for v in obj.data.vertices:
+            for g in v.groups:
+                w = wanted.get(g.group)
+                if w is not None:
+                    w[v.index] = g.weight
+    return out
+
+
+def write_attribute(mesh, name: str, kind: str, values: np.ndarray, domain: str = "POINT"):
+    """Create or replace a mesh attribute and fill it in one call.
+
+    kind: 'FLOAT' (n,), 'INT' (n,), 'FLOAT_VECTOR' (n,3), 'FLOAT_COLOR' (n,4).
+    """
+    attr = mesh.attributes.get(name)
+    if attr is not None and (attr.data_type != kind or attr.domain != domain):
+        mesh.attributes.remove(attr)
+        attr = None
+    if attr is None:
+        attr = mesh.attributes.new(name, kind, domain)
+    prop = {"FLOAT": "value", "INT": "value", "FLOAT_VECTOR": "vector", "FLOAT_COLOR": "color"}[kind]
+    dtype = np.int32 if kind == "INT" else np.float32
+    attr.data.foreach_set(prop, np.ascontiguousarray(values, dtype=dtype).reshape(-1))
+    return attr
+
+
+def read_attribute(mesh, name: str, kind: str) -> np.ndarray:
+    attr = mesh.attributes[name]
+    n = len(attr.data)
+    width = {"FLOAT": 1, "INT": 1, "FLOAT_VECTOR": 3, "FLOAT_COLOR": 4}[kind]
+    prop = {"FLOAT": "value", "INT": "value", "FLOAT_VECTOR": "vector", "FLOAT_COLOR": "color"}[kind]
+    buf = np.empty(n * width, dtype=np.int32 if kind == "INT" else np.float32)
+    attr.data.foreach_get(prop, buf)
+    return buf if width == 1 else buf.reshape(n, width)
+
+
+def remove_attributes(mesh, prefix: str) -> None:
+    for name in [a.name for a in mesh.attributes if a.name.startswith(prefix)]:
+        mesh.attributes.remove(mesh.attributes[name])

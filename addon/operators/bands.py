@@ -1,0 +1,57 @@
+"""Bands: paint a band's mask, reset the gains."""
+
+from __future__ import annotations
+
+import bpy
+
+from .. import keys
+from ._common import DecomposedOperator
+
+
+class POINTSCALE_OT_paint_band_mask(DecomposedOperator, bpy.types.Operator):
+    """Create or activate the band's mask vertex group ('Band l mask') and enter Weight Paint:
+    weight 0 keeps the original there, 1 applies the band's gain fully"""
+
+    bl_idname = "pointscale.paint_band_mask"
+    bl_label = "Paint Band Mask"
+    bl_options = {"REGISTER", "UNDO"}
+
+    band: bpy.props.IntProperty(name="Band", min=0)
+    enter_paint: bpy.props.BoolProperty(name="Enter Weight Paint", default=True)
+
+    def execute(self, context):
+        obj = self.guard(context)
+        if obj is None:
+            return {"CANCELLED"}
+        k = obj.data.multiscale.n_bands
+        if self.band >= k:
+            self.report({"ERROR"}, f"band {self.band} does not exist: '{obj.name}' has bands 0..{k - 1}")
+            return {"CANCELLED"}
+        vg = keys.ensure_mask(obj, self.band)
+        kb = keys.get(obj.data, keys.band_name(self.band))
+        kb.vertex_group = vg.name
+        obj.vertex_groups.active_index = vg.index
+        if self.enter_paint and not bpy.app.background:
+            bpy.ops.object.mode_set(mode="WEIGHT_PAINT")
+        return {"FINISHED"}
+
+
+class POINTSCALE_OT_reset_bands(DecomposedOperator, bpy.types.Operator):
+    """Set every band gain back to 1 (the original detail); masks are kept"""
+
+    bl_idname = "pointscale.reset_bands"
+    bl_label = "Reset Gains"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def execute(self, context):
+        obj = self.guard(context)
+        if obj is None:
+            return {"CANCELLED"}
+        for l in range(obj.data.multiscale.n_bands):
+            kb = keys.get(obj.data, keys.band_name(l))
+            if kb is not None:
+                kb.value = 0.0
+        return {"FINISHED"}
+
+
+CLASSES = [POINTSCALE_OT_paint_band_mask, POINTSCALE_OT_reset_bands]

@@ -1,0 +1,37 @@
+"""Clear: remove everything a decompose wrote (keys, masks stay, attributes, settings state)."""
+
+from __future__ import annotations
+
+import bpy
+
+from .. import state, storage, writeback
+
+
+class POINTSCALE_OT_clear(bpy.types.Operator):
+    """Remove the Level, Band and result keys and the stored decomposition from the mesh.
+    The Basis, other shape keys and the band mask vertex groups are kept"""
+
+    bl_idname = "pointscale.clear"
+    bl_label = "Clear Multiscale Data"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.active_object
+        problem = state.mesh_object_problem(obj)
+        if problem is None and not storage.has_data(obj.data) and obj.data.multiscale.n_bands == 0:
+            problem = f"'{obj.name}' has no multiscale data"
+        if problem:
+            cls.poll_message_set(problem)
+            return False
+        return True
+
+    def execute(self, context):
+        obj = context.active_object
+        if obj.mode != "OBJECT":
+            bpy.ops.object.mode_set(mode="OBJECT")
+        writeback.clear(obj)
+        return {"FINISHED"}
+
+
+CLASSES = [POINTSCALE_OT_clear]

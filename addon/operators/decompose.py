@@ -1,0 +1,176 @@
+"""Decompose: the mesh's Basis -> Level/Band keys, masks and attributes.
+
+From the UI (invoke) it runs in a worker thread under a modal operator, with
+progress, status text and Esc to cancel.  From scripts and in background
+mode (execute) it runs synchronously.  Either way every bpy write happens on
+the main thread, and only after the engine has finished, so a cancel or an
+error leaves the mesh exactly as it was.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import bpy
+
+from .. import compute, engine, mesh_io, preferences, state, writeback
+
+
+def _problem(context):
+    obj = context.active_object
+    return state.mesh_object_problem(obj) or state.engine_problem()
+
+
+def _prepare(op, context):
+    """Read the input on the main thread: (points, kwargs) or None after a report."""
+    obj = context.active_object
+    if obj.mode == "EDIT":
+        bpy.ops.object.mode_set(mode="OBJECT")
+    mesh = obj.data
+    points = mesh_io.read_basis(mesh)
+    s = mesh.multiscale
+    ps = engine.get()
+    try:
+        kwargs = compute.decompose_kwargs(
+            ps, s.levels, s.decimation, s.kernel, s.neighbors, preferences.get(context).threads, s.smoother, s.encoding
+        )
+        problem = compute.logic.check_points(points)
+        if problem:
+            raise ValueError(problem)
+    except ValueError as exc:
+        op.report({"ERROR"}, f"Decompose '{obj.name}': {exc}")
+        return None
+    return points, kwargs
+
+
+class POINTSCALE_OT_decompose(bpy.types.Operator):
+    """Split the mesh into a smooth base and detail bands (Level and Band shape keys).
+    The Basis is read, never modified; faces are kept but not used"""
+
+    bl_idname = "pointscale.decompose"
+    bl_label = "Decompose"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        problem = _problem(context)
+        if problem:
+            cls.poll_message_set(problem)
+            return False
+        return True
+
+    # --- synchronous: scripts, background mode, redo
+    def execute(self, context):
+        prepared = _prepare(self, context)
+        if prepared is None:
+            return {"CANCELLED"}
+        points, kwargs = prepared
+        obj = context.active_object
+        try:
+            # No progress callback: the engine may call it from its own threads,
+            # and bpy must only be touched from the main thread.
+            layout = compute.decompose(engine.get(), points, **kwargs)
+        except ValueError as exc:
+            self.report({"ERROR"}, f"Decompose '{obj.name}': {exc}")
+            return {"CANCELLED"}
+        return self._finish(context, obj, layout, len(points))
+
+    def _finish(self, context, obj, layout, n):
+        if obj.type != "MESH" or len(obj.data.vertices) != n:
+            self.report({"ERROR"}, f"'{obj.name}' changed while it was being decomposed; nothing was written")
+            return {"CANCELLED"}
+        if obj.mode == "EDIT":
+            bpy.ops.object.mode_set(mode="OBJECT")
+        writeback.apply_layout(obj, layout)
+        k = layout.k
+        self.report({"INFO"}, f"Decomposed '{obj.name}': {n} vertices, {k + 1} levels, {k} bands")
+        return {"FINISHED"}
+
+    # --- modal: the UI button
+    def invoke(self, context, event):
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        prepared = _prepare(self, context)
+        if prepared is None:
+            return {"CANCELLED"}
+        points, kwargs = prepared
+        self._obj_name = context.active_object.name
+        self._n = len(points)
+        self._fraction = 0.0
+        self._cancel = threading.Event()
+        self._result = None
+        self._error = None
+        self._started = time.perf_counter()
+        ps = engine.get()
+
+        def progress(fraction):
+            self._fraction = float(fraction)
+            return not self._cancel.is_set()
+
+        def work():
+            try:
+                self._result = compute.decompose(ps, points, progress=progress, **kwargs)
+            except engine.cancelled_type():
+                self._error = "cancelled"
+            except Exception as exc:  # reported on the main thread
+                self._error = exc
+
+        self._thread = threading.Thread(target=work, name="pointscale-decompose", daemon=True)
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(preferences.get(context).poll_interval, window=context.window)
+        wm.modal_handler_add(self)
+        wm.progress_begin(0, 100)
+        self._status(context, "starting")
+        self._thread.start()
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        if event.type == "ESC" and event.value == "PRESS" and not self._cancel.is_set():
+            self._cancel.set()
+            self._status(context, "cancelling")
+            return {"RUNNING_MODAL"}
+        if event.type != "TIMER" or event.timer is not self._timer:
+            return {"PASS_THROUGH"}  # keep the UI responsive
+        if self._thread.is_alive():
+            context.window_manager.progress_update(100.0 * self._fraction)
+            self._status(context, "cancelling" if self._cancel.is_set() else f"{100 * self._fraction:.0f}%")
+            return {"RUNNING_MODAL"}
+        self._cleanup(context)
+        if self._error == "cancelled" or (self._cancel.is_set() and self._result is None):
+            self.report({"WARNING"}, "Decompose cancelled; the mesh is unchanged")
+            return {"CANCELLED"}
+        if self._error is not None:
+            self.report({"ERROR"}, f"Decompose '{self._obj_name}': {self._error}")
+            return {"CANCELLED"}
+        obj = bpy.data.objects.get(self._obj_name)
+        if obj is None:
+            self.report({"ERROR"}, f"'{self._obj_name}' disappeared while it was being decomposed")
+            return {"CANCELLED"}
+        return self._finish(context, obj, self._result, self._n)
+
+    def cancel(self, context):
+        # Blender ends the modal (file load, quit): stop the worker, drop the result.
+        self._cancel.set()
+        self._thread.join()
+        self._cleanup(context)
+
+    def _status(self, context, what):
+        elapsed = time.perf_counter() - self._started
+        text = f"Multiscale: decomposing '{self._obj_name}' ({self._n} vertices) {what}, {elapsed:.0f} s  |  Esc to cancel"
+        if context.workspace is not None:
+            context.workspace.status_text_set(text)
+        if context.area is not None:
+            context.area.tag_redraw()
+
+    def _cleanup(self, context):
+        wm = context.window_manager
+        if getattr(self, "_timer", None) is not None:
+            wm.event_timer_remove(self._timer)
+            self._timer = None
+        wm.progress_end()
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+
+
+CLASSES = [POINTSCALE_OT_decompose]

@@ -1,0 +1,107 @@
+"""Deform: edit the base (Level 0), Rebuild detail, Bake filter (Sec. 8.1-8.2)."""
+
+from __future__ import annotations
+
+import bpy
+
+from .. import compute, engine, keys, mesh_io, writeback
+from ._common import DecomposedOperator
+
+
+class POINTSCALE_OT_edit_base(DecomposedOperator, bpy.types.Operator):
+    """Make the 'Level 0' key active and enter Edit mode: move the smooth base with any tool,
+    then press Rebuild Detail"""
+
+    bl_idname = "pointscale.edit_base"
+    bl_label = "Edit Base"
+    bl_options = {"REGISTER", "UNDO"}
+
+    mode: bpy.props.EnumProperty(
+        name="Mode", items=[("EDIT", "Edit", ""), ("SCULPT", "Sculpt", ""), ("OBJECT", "Object", "Only activate")],
+        default="EDIT",
+    )
+
+    def execute(self, context):
+        obj = self.guard(context)
+        if obj is None:
+            return {"CANCELLED"}
+        mesh = obj.data
+        idx = mesh.shape_keys.key_blocks.find(keys.level_name(0))
+        obj.active_shape_key_index = idx
+        obj.show_only_shape_key = False
+        mesh.multiscale.scale = 0.0  # object mode shows Level 0 too
+        for name in (keys.EDIT, keys.FILTER):
+            kb = keys.get(mesh, name)
+            if kb is not None:
+                kb.value = 0.0
+        if self.mode != "OBJECT" and not bpy.app.background:
+            bpy.ops.object.mode_set(mode=self.mode)
+        return {"FINISHED"}
+
+
+class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
+    """Carry the full detail onto the edited 'Level 0' key along its new normals
+    (normals recomputed on every level) and show it as the 'Multiscale Edit' key"""
+
+    bl_idname = "pointscale.rebuild_detail"
+    bl_label = "Rebuild Detail"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def execute(self, context):
+        obj = self.guard(context)
+        if obj is None:
+            return {"CANCELLED"}
+        ps = engine.get()
+        mesh = obj.data
+        try:
+            dec = writeback.decomposition(mesh, ps)
+            base = mesh_io.read_key(keys.get(mesh, keys.level_name(0)))
+            result = compute.rebuild(ps, dec, base)
+        except ValueError as exc:
+            self.report({"ERROR"}, f"Rebuild detail: {exc}")
+            return {"CANCELLED"}
+        writeback.show_result(obj, keys.EDIT, result)
+        return {"FINISHED"}
+
+
+class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
+    """Exact reconstruction of the current band gains and masks (normals recomputed)
+    into the 'Multiscale Filter' key; the band sliders go back to gain 1"""
+
+    bl_idname = "pointscale.bake_filter"
+    bl_label = "Bake Filter"
+    bl_options = {"REGISTER", "UNDO"}
+
+    reset_bands: bpy.props.BoolProperty(
+        name="Reset Bands", description="Set the band gains back to 1 after baking, so they do not apply twice",
+        default=True,
+    )
+
+    def execute(self, context):
+        obj = self.guard(context)
+        if obj is None:
+            return {"CANCELLED"}
+        ps = engine.get()
+        mesh = obj.data
+        k = mesh.multiscale.n_bands
+        try:
+            dec = writeback.decomposition(mesh, ps)
+            base = mesh_io.read_key(keys.get(mesh, keys.level_name(0)))
+            values = keys.band_values(mesh, k)
+            weights = mesh_io.read_group_weights(obj, keys.band_masks(obj, k), len(mesh.vertices))
+            result = compute.bake(ps, dec, base, values, weights)
+        except ValueError as exc:
+            self.report({"ERROR"}, f"Bake filter: {exc}")
+            return {"CANCELLED"}
+        writeback.show_result(obj, keys.FILTER, result)
+        if self.reset_bands:
+            for l in range(k):
+                kb = keys.get(mesh, keys.band_name(l))
+                if kb is not None:
+                    kb.value = 0.0
+        gains = ", ".join(f"{1 + v:.2f}" for v in values)
+        self.report({"INFO"}, f"Baked gains ({gains}) into '{keys.FILTER}'")
+        return {"FINISHED"}
+
+
+CLASSES = [POINTSCALE_OT_edit_base, POINTSCALE_OT_rebuild_detail, POINTSCALE_OT_bake_filter]

@@ -1,0 +1,58 @@
+"""Display: detail coefficients as blue/white/red vertex colours (Fig. 2)."""
+
+from __future__ import annotations
+
+import bpy
+
+from .. import logic, mesh_io, storage
+from ._common import DecomposedOperator
+
+
+def _show_attribute_colors(context):
+    screen = context.screen
+    if screen is None:
+        return
+    for area in screen.areas:
+        if area.type == "VIEW_3D":
+            shading = area.spaces.active.shading
+            if shading.type not in {"SOLID"}:
+                shading.type = "SOLID"
+            shading.color_type = "VERTEX"  # shown as "Attribute" in the UI
+            area.tag_redraw()
+
+
+class POINTSCALE_OT_show_details(DecomposedOperator, bpy.types.Operator):
+    """Colour the vertices by one band's detail coefficients: blue below the smoother level,
+    white on it, red above it; the viewport switches to attribute colours"""
+
+    bl_idname = "pointscale.show_details"
+    bl_label = "Show Details"
+    bl_options = {"REGISTER", "UNDO"}
+
+    band: bpy.props.IntProperty(name="Band", min=0, default=0)
+    scale: bpy.props.FloatProperty(
+        name="Saturation", description="Detail that maps to full colour; 0 = the 98th percentile", min=0.0, default=0.0
+    )
+
+    def execute(self, context):
+        obj = self.guard(context)
+        if obj is None:
+            return {"CANCELLED"}
+        mesh = obj.data
+        k = mesh.multiscale.n_bands
+        if self.band >= k:
+            self.report({"ERROR"}, f"band {self.band} does not exist: '{obj.name}' has bands 0..{k - 1}")
+            return {"CANCELLED"}
+        d = storage.read_details(mesh, self.band)
+        rgba = logic.detail_colors(d, self.scale or None)
+        mesh_io.write_attribute(mesh, storage.COLOR, "FLOAT_COLOR", rgba)
+        attr = mesh.color_attributes.get(storage.COLOR)
+        mesh.color_attributes.active_color = attr
+        mesh.color_attributes.render_color_index = mesh.color_attributes.find(storage.COLOR)
+        mesh.multiscale.detail_band = self.band
+        mesh.update()
+        _show_attribute_colors(context)
+        return {"FINISHED"}
+
+
+CLASSES = [POINTSCALE_OT_show_details]

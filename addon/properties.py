@@ -1,0 +1,155 @@
+"""Settings of a decomposition, kept on the mesh: ``mesh.multiscale``."""
+
+from __future__ import annotations
+
+import bpy
+from bpy.props import (
+    BoolProperty,
+    CollectionProperty,
+    EnumProperty,
+    FloatProperty,
+    IntProperty,
+    PointerProperty,
+)
+
+from . import keys
+
+
+def _gain_get(self):
+    kb = keys.get(self.id_data, keys.band_name(self.index))
+    return 1.0 + kb.value if kb is not None else 1.0
+
+
+def _gain_set(self, value):
+    kb = keys.get(self.id_data, keys.band_name(self.index))
+    if kb is not None:
+        kb.value = value - 1.0
+
+
+class MULTISCALE_PG_band(bpy.types.PropertyGroup):
+    """One band's gain; a view of the ``Band l`` key value (gain - 1), not a copy."""
+
+    index: IntProperty(name="Band", min=0)
+    gain: FloatProperty(
+        name="Gain",
+        description="Scale of this detail band: 0 removes it, 1 keeps it, above 1 enhances it "
+        "(the Band key value is gain - 1; paint the band's mask to apply it locally)",
+        get=_gain_get,
+        set=_gain_set,
+        min=1.0 + keys.BAND_MIN,
+        max=1.0 + keys.BAND_MAX,
+        step=5,
+    )
+
+
+def _scale_get(self):
+    return self.scale_store
+
+
+def _scale_set(self, value):
+    k = self.n_bands
+    value = min(max(float(value), 0.0), float(k))
+    self.scale_store = value
+    if k > 0:
+        keys.set_scale(self.id_data, value, k)
+
+
+def _poll_other_mesh(self, obj):
+    return obj.type == "MESH" and obj.data != self.id_data
+
+
+def _poll_mesh(self, obj):
+    return obj.type == "MESH"
+
+
+class MULTISCALE_PG_settings(bpy.types.PropertyGroup):
+    # --- decomposition settings
+    levels: IntProperty(
+        name="Levels",
+        description="Point clouds P^0..P^k, so levels - 1 detail bands (4 gives the 3 bands of the paper's Fig. 7)",
+        default=4,
+        min=2,
+        max=12,
+    )
+    decimation: FloatProperty(
+        name="Decimation",
+        description="Factor gamma: each coarser level is supported by gamma times as many points",
+        default=0.25,
+        min=0.02,
+        max=0.9,
+    )
+    kernel: FloatProperty(
+        name="Kernel Width",
+        description="Gaussian kernel width as a multiple of the local sample spacing of each level",
+        default=1.0,
+        min=0.1,
+        max=16.0,
+    )
+    neighbors: IntProperty(
+        name="Neighbours", description="Support points in each local plane fit", default=24, min=4, max=256
+    )
+    smoother: EnumProperty(
+        name="Smoother",
+        items=[
+            ("MLS", "MLS Projection", "Integrated least-squares projection onto decimated levels (Sec. 7)"),
+            ("DIFFUSION", "Diffusion", "Laplacian diffusion on k-nearest-neighbour graphs (Sec. 5.1)"),
+        ],
+        default="MLS",
+    )
+    encoding: EnumProperty(
+        name="Encoding",
+        items=[
+            ("PROJECTION", "Projection", "Top-down: project each point onto the smoother surface (Sec. 6.2)"),
+            ("RAY", "Ray Shooting", "Bottom-up: shoot along the smooth normals (Sec. 6.1)"),
+        ],
+        default="PROJECTION",
+    )
+    # --- state written by Decompose
+    n_vertices: IntProperty(name="Vertices", description="Vertex count at decompose time", default=0)
+    n_bands: IntProperty(name="Bands", default=0)
+    bands: CollectionProperty(type=MULTISCALE_PG_band)
+    scale_store: FloatProperty(default=0.0, options={"HIDDEN"})
+    scale: FloatProperty(
+        name="Scale",
+        description="Continuous level: 0 is the smoothest level P^0, the number of bands the original "
+        "(drives the Level keys, Eq. 20-21)",
+        get=_scale_get,
+        set=_scale_set,
+        min=0.0,
+        soft_max=12.0,
+        max=12.0,
+        step=5,
+    )
+    # --- display
+    detail_band: IntProperty(name="Band", description="Band whose detail coefficients are shown", default=0, min=0)
+    # --- morph
+    morph_target: PointerProperty(
+        name="Target", type=bpy.types.Object, poll=_poll_other_mesh, description="Model B of the morph"
+    )
+    morph_base: EnumProperty(
+        name="Base",
+        items=[
+            ("ELLIPSOID", "Ellipsoid", "The largest ellipsoid in the common bounding box (Sec. 8.3)"),
+            ("OBJECT", "Object", "A chosen mesh as the common base surface"),
+        ],
+        default="ELLIPSOID",
+    )
+    morph_base_object: PointerProperty(
+        name="Base Object", type=bpy.types.Object, poll=_poll_mesh, description="Common base surface"
+    )
+    morph_samples: IntProperty(
+        name="Base Samples", description="Points sampled on the ellipsoid base", default=40000, min=1000
+    )
+    use_modal: BoolProperty(default=True, options={"HIDDEN"})
+
+
+CLASSES = [MULTISCALE_PG_band, MULTISCALE_PG_settings]
+
+
+def register_props():
+    bpy.types.Mesh.multiscale = PointerProperty(type=MULTISCALE_PG_settings)
+
+
+def unregister_props():
+    if hasattr(bpy.types.Mesh, "multiscale"):
+        del bpy.types.Mesh.multiscale
