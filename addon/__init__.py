@@ -12,6 +12,13 @@ _MODULES = [properties, preferences, operators, panels]
 _registered = False
 
 
+@bpy.app.handlers.persistent
+def _on_load(*_args):
+    from . import writeback
+
+    writeback.forget_all()  # cached engine objects belong to the previous file
+
+
 def _classes():
     return [cls for module in _MODULES for cls in module.CLASSES]
 
@@ -27,6 +34,8 @@ def register():
             bpy.utils.unregister_class(cls)
             bpy.utils.register_class(cls)
     properties.register_props()
+    if _on_load not in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.append(_on_load)
     _registered = True
 
 
@@ -35,6 +44,8 @@ def unregister():
     from . import writeback
 
     writeback.forget_all()
+    if _on_load in bpy.app.handlers.load_post:
+        bpy.app.handlers.load_post.remove(_on_load)
     properties.unregister_props()
     for cls in reversed(_classes()):
         if cls.is_registered:

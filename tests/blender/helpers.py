@@ -1,0 +1,102 @@
+"""Small bpy helpers for the Blender tests (bulk reads only)."""
+
+import bpy
+import numpy as np
+
+
+def mesh_object(points, faces=(), name="Model"):
+    """A new mesh object (vertex-only when no faces), linked, active and selected."""
+    points = np.asarray(points, dtype=np.float32)
+    me = bpy.data.meshes.new(name)
+    me.vertices.add(len(points))
+    me.vertices.foreach_set("co", points.reshape(-1))
+    if len(faces):
+        faces = np.asarray(faces, dtype=np.int32)
+        me.loops.add(faces.size)
+        me.polygons.add(len(faces))
+        me.loops.foreach_set("vertex_index", faces.reshape(-1))
+        me.polygons.foreach_set("loop_start", np.arange(0, faces.size, faces.shape[1], dtype=np.int32))
+        me.update(calc_edges=True)
+    me.update()
+    obj = bpy.data.objects.new(name, me)
+    bpy.context.scene.collection.objects.link(obj)
+    for o in bpy.context.view_layer.objects:
+        o.select_set(False)
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+    return obj
+
+
+def vertices(mesh):
+    co = np.empty(len(mesh.vertices) * 3, np.float32)
+    mesh.vertices.foreach_get("co", co)
+    return co.reshape(-1, 3)
+
+
+def key(mesh, name):
+    kb = mesh.shape_keys.key_blocks[name]
+    co = np.empty(len(kb.points) * 3, np.float32)
+    kb.points.foreach_get("co", co)
+    return co.reshape(-1, 3)
+
+
+def set_key(mesh, name, co):
+    mesh.shape_keys.key_blocks[name].points.foreach_set("co", np.asarray(co, np.float32).reshape(-1))
+    mesh.update()
+
+
+def evaluated(obj):
+    """Positions Blender shows (shape keys with values and masks applied)."""
+    bpy.context.view_layer.update()
+    dg = bpy.context.evaluated_depsgraph_get()
+    ev = obj.evaluated_get(dg)
+    me = ev.to_mesh()
+    try:
+        return vertices(me).astype(np.float64)
+    finally:
+        ev.to_mesh_clear()
+
+
+def snapshot(obj):
+    """Every shape key, attribute and vertex position, for 'nothing was modified' checks."""
+    me = obj.data
+    out = {"co": vertices(me).copy()}
+    if me.shape_keys is not None:
+        for kb in me.shape_keys.key_blocks:
+            out["key:" + kb.name] = key(me, kb.name).copy()
+            out["value:" + kb.name] = kb.value
+    for attr in me.attributes:
+        if attr.domain == "POINT" and attr.data_type in {"FLOAT", "INT"}:
+            buf = np.empty(len(attr.data), np.float32 if attr.data_type == "FLOAT" else np.int32)
+            attr.data.foreach_get("value", buf)
+            out["attr:" + attr.name] = buf
+    out["groups"] = [g.name for g in obj.vertex_groups]
+    return out
+
+
+def same(a, b):
+    if a.keys() != b.keys():
+        return False
+    for k in a:
+        x, y = a[k], b[k]
+        if isinstance(x, np.ndarray):
+            if x.shape != y.shape or not np.array_equal(x, y, equal_nan=True):
+                return False
+        elif x != y:
+            return False
+    return True
+
+
+def noisy_sphere(n=4000, seed=0):
+    import pointscale as ps
+
+    rng = np.random.default_rng(seed)
+    p = ps.shapes.bumpy_sphere(n, coarse=0.06, fine=0.01)
+    return p * (1.0 + 0.003 * rng.standard_normal(len(p)))[:, None]
+
+
+def decompose(obj, **settings):
+    s = obj.data.multiscale
+    for name, value in settings.items():
+        setattr(s, name, value)
+    assert bpy.ops.pointscale.decompose() == {"FINISHED"}
