@@ -1,0 +1,83 @@
+"""Check 10: the built zip installs into a fresh user extension repository of real Blender,
+and Decompose runs through the installed copy with the bundled engine wheel.
+
+Runs in a subprocess with its own BLENDER_USER_RESOURCES (a fresh user folder), and hides
+the developer's editable engine there, so only the zip's wheel can satisfy ``import pointscale``.
+"""
+
+import json
+import os
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT
+
+pytestmark = pytest.mark.blender
+
+SCRIPT = r'''
+import json, sys
+sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in type(f).__module__.lower()
+                    and "scikitbuild" not in type(f).__name__.lower()]
+sys.path[:] = [p for p in sys.path if not p.startswith(sys.argv[2])]
+import bpy, numpy as np
+out = {}
+out["install"] = sorted(bpy.ops.extensions.package_install_files(
+    filepath=sys.argv[1], repo="user_default", enable_on_install=True))
+out["modules"] = sorted(m for m in sys.modules if m.startswith("bl_ext.user_default.pointscale"))[:1]
+import pointscale
+out["engine"] = pointscale.__file__
+bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=5)
+obj = bpy.context.object
+basis = np.empty(len(obj.data.vertices) * 3, np.float32); obj.data.vertices.foreach_get("co", basis)
+out["decompose"] = sorted(bpy.ops.pointscale.decompose())
+out["keys"] = [kb.name for kb in obj.data.shape_keys.key_blocks]
+out["rebuild"] = sorted(bpy.ops.pointscale.rebuild_detail())
+kb = obj.data.shape_keys.key_blocks["Multiscale Edit"]
+co = np.empty(len(kb.points) * 3, np.float32); kb.points.foreach_get("co", co)
+out["rebuild_error"] = float(np.abs(co - basis).max())
+out["addon_file"] = sys.modules["bl_ext.user_default.pointscale"].__file__
+print("RESULT" + json.dumps(out))
+'''
+
+
+def _zip_is_current(path: Path) -> bool:
+    with zipfile.ZipFile(path) as z:
+        names = set(z.namelist())
+        for src in (ROOT / "addon").rglob("*.py"):
+            rel = src.relative_to(ROOT / "addon").as_posix()
+            if rel not in names or z.read(rel) != src.read_bytes():
+                return False
+    return True
+
+
+@pytest.fixture(scope="module")
+def built_zip():
+    zips = sorted((ROOT / "dist").glob("pointscale-*-linux_x64.zip"))
+    if not zips or not _zip_is_current(zips[-1]):
+        if not list((ROOT / "dist" / "wheels").glob("pointscale-*.whl")):
+            pytest.skip("no engine wheel in dist/wheels: run `python scripts/build_extension.py` first")
+        subprocess.run([sys.executable, str(ROOT / "scripts" / "build_extension.py"), "--no-wheel"],
+                       check=True, capture_output=True)
+        zips = sorted((ROOT / "dist").glob("pointscale-*-linux_x64.zip"))
+    return zips[-1]
+
+
+def test_zip_installs_and_decomposes(built_zip, tmp_path):
+    env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp_path / "user"))
+    env.pop("PYTHONPATH", None)
+    proc = subprocess.run([sys.executable, "-c", SCRIPT, str(built_zip), str(ROOT)], env=env,
+                          capture_output=True, text=True, timeout=170, cwd=str(tmp_path))
+    line = next((l for l in proc.stdout.splitlines() if l.startswith("RESULT")), None)
+    assert line is not None, proc.stdout[-3000:] + proc.stderr[-3000:]
+    out = json.loads(line[len("RESULT"):])
+    user = str(tmp_path / "user")
+    assert out["install"] == ["FINISHED"]
+    assert out["addon_file"].startswith(user)  # the installed copy, not the source tree
+    assert out["engine"].startswith(user)  # the bundled wheel, not the editable engine
+    assert out["decompose"] == ["FINISHED"] and out["rebuild"] == ["FINISHED"]
+    assert out["keys"][:2] == ["Basis", "Level 0"] and "Band 2" in out["keys"]
+    assert out["rebuild_error"] < 1e-5
