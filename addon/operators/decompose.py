@@ -9,12 +9,10 @@ error leaves the mesh exactly as it was.
 
 from __future__ import annotations
 
-import threading
-import time
-
 import bpy
 
 from .. import compute, engine, mesh_io, preferences, state, writeback
+from ..job import Job
 
 
 def _problem(context):
@@ -97,67 +95,56 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         points, kwargs = prepared
         self._obj_name = context.active_object.name
         self._n = len(points)
-        self._fraction = 0.0
-        self._cancel = threading.Event()
-        self._result = None
-        self._error = None
-        self._started = time.perf_counter()
         ps = engine.get()
-
-        def progress(fraction):
-            self._fraction = float(fraction)
-            return not self._cancel.is_set()
-
-        def work():
-            try:
-                self._result = compute.decompose(ps, points, progress=progress, **kwargs)
-            except engine.cancelled_type():
-                self._error = "cancelled"
-            except Exception as exc:  # reported on the main thread
-                self._error = exc
-
-        self._thread = threading.Thread(target=work, name="pointscale-decompose", daemon=True)
+        self._job = Job(
+            lambda progress: compute.decompose(ps, points, progress=progress, **kwargs),
+            cancelled_type=engine.cancelled_type(),
+            name="pointscale-decompose",
+        )
         wm = context.window_manager
         self._timer = wm.event_timer_add(preferences.get(context).poll_interval, window=context.window)
         wm.modal_handler_add(self)
         wm.progress_begin(0, 100)
-        self._status(context, "starting")
-        self._thread.start()
+        self._job.start()
+        self._status(context)
         return {"RUNNING_MODAL"}
 
     def modal(self, context, event):
-        if event.type == "ESC" and event.value == "PRESS" and not self._cancel.is_set():
-            self._cancel.set()
-            self._status(context, "cancelling")
+        job = self._job
+        if event.type == "ESC" and event.value == "PRESS" and not job.cancelling:
+            job.cancel()  # the engine stops at its next progress call
+            self._status(context)
             return {"RUNNING_MODAL"}
         if event.type != "TIMER" or event.timer is not self._timer:
-            return {"PASS_THROUGH"}  # keep the UI responsive
-        if self._thread.is_alive():
-            context.window_manager.progress_update(100.0 * self._fraction)
-            self._status(context, "cancelling" if self._cancel.is_set() else f"{100 * self._fraction:.0f}%")
+            return {"PASS_THROUGH"}  # the UI stays responsive
+        if job.running:
+            context.window_manager.progress_update(100.0 * job.fraction)
+            self._status(context)
             return {"RUNNING_MODAL"}
         self._cleanup(context)
-        if self._error == "cancelled" or (self._cancel.is_set() and self._result is None):
+        if job.cancelled:
             self.report({"WARNING"}, "Decompose cancelled; the mesh is unchanged")
             return {"CANCELLED"}
-        if self._error is not None:
-            self.report({"ERROR"}, f"Decompose '{self._obj_name}': {self._error}")
+        if job.error is not None:
+            self.report({"ERROR"}, f"Decompose '{self._obj_name}': {job.error}")
             return {"CANCELLED"}
         obj = bpy.data.objects.get(self._obj_name)
         if obj is None:
             self.report({"ERROR"}, f"'{self._obj_name}' disappeared while it was being decomposed")
             return {"CANCELLED"}
-        return self._finish(context, obj, self._result, self._n)
+        return self._finish(context, obj, job.result, self._n)
 
     def cancel(self, context):
-        # Blender ends the modal (file load, quit): stop the worker, drop the result.
-        self._cancel.set()
-        self._thread.join()
+        # Blender ends the modal itself (file load, quit): stop the worker, drop the result.
+        self._job.cancel()
+        self._job.wait()
         self._cleanup(context)
 
-    def _status(self, context, what):
-        elapsed = time.perf_counter() - self._started
-        text = f"Multiscale: decomposing '{self._obj_name}' ({self._n} vertices) {what}, {elapsed:.0f} s  |  Esc to cancel"
+    def _status(self, context):
+        job = self._job
+        what = "cancelling..." if job.cancelling else f"{100 * job.fraction:.0f}%"
+        text = (f"Multiscale: decomposing '{self._obj_name}' ({self._n} vertices) {what}  "
+                f"{job.elapsed:.0f} s  |  Esc to cancel")
         if context.workspace is not None:
             context.workspace.status_text_set(text)
         if context.area is not None:
@@ -168,7 +155,7 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         if getattr(self, "_timer", None) is not None:
             wm.event_timer_remove(self._timer)
             self._timer = None
-        wm.progress_end()
+            wm.progress_end()
         if context.workspace is not None:
             context.workspace.status_text_set(None)
 
