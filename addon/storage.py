@@ -53,10 +53,13 @@ def store(mesh, dec, details=None, normals=None) -> None:
 
 
 def _idprop_array(v: np.ndarray):
-    # float64 arrays go in as buffers (fast, exact); integers as Python ints.
-    if v.dtype.kind == "f":
-        return np.ascontiguousarray(v, dtype=np.float64)
-    return [int(x) for x in v.tolist()]
+    # Buffers (fast): float64 as is; integers as int32 when they fit, else float64 (exact to
+    # 2**53).  The original dtype is in the metadata, so loading casts back.
+    if v.dtype.kind in "iub":
+        info = np.iinfo(np.int32)
+        if v.size == 0 or (int(v.min()) >= info.min and int(v.max()) <= info.max):
+            return np.ascontiguousarray(v, dtype=np.int32)
+    return np.ascontiguousarray(v, dtype=np.float64)
 
 
 def load(mesh, engine):

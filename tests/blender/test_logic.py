@@ -1,0 +1,99 @@
+"""The add-on's pure-NumPy functions (no Blender needed, but they ship with it)."""
+
+import importlib
+
+import numpy as np
+import pytest
+
+from conftest import ADDON_NAME
+
+pytestmark = pytest.mark.blender
+
+
+@pytest.fixture(scope="module")
+def logic(addon):
+    return importlib.import_module(ADDON_NAME + ".logic")
+
+
+def test_level_key_values_are_hat_weights(logic):
+    assert np.allclose(logic.level_key_values(0.0, 3), [1, 0, 0])
+    assert np.allclose(logic.level_key_values(1.25, 3), [0, 0.75, 0.25])
+    assert np.allclose(logic.level_key_values(2.5, 3), [0, 0, 0.5])
+    assert np.allclose(logic.level_key_values(3.0, 3), [0, 0, 0])
+    assert np.allclose(logic.level_key_values(-1.0, 3), [1, 0, 0])  # clamped
+    with pytest.raises(ValueError):
+        logic.level_key_values(0.5, 0)
+
+
+def test_keys_reproduce_levels_and_blend(logic):
+    rng = np.random.default_rng(0)
+    k, n = 3, 50
+    levels = rng.standard_normal((k + 1, n, 3))
+    basis = levels[k]
+    level_keys = levels[:k]
+    bands = logic.band_key_data(basis, level_keys)
+    # all band values -1 -> P^0; 0 -> Basis
+    assert np.allclose(logic.evaluate_keys(basis, bands, [-1] * k), levels[0])
+    assert np.allclose(logic.evaluate_keys(basis, bands, [0] * k), basis)
+    # scale t -> (1-f) P^l + f P^{l+1}
+    t = 1.3
+    shown = logic.evaluate_keys(basis, level_keys, logic.level_key_values(t, k))
+    assert np.allclose(shown, 0.7 * levels[1] + 0.3 * levels[2])
+    # masks: weight 0 keeps the basis
+    w = [None, None, np.r_[np.zeros(25), np.ones(25)]]
+    shown = logic.evaluate_keys(basis, bands, [0, 0, 1.0], w)
+    assert np.allclose(shown[:25], basis[:25]) and not np.allclose(shown[25:], basis[25:])
+
+
+def test_per_point_gains(logic):
+    assert np.allclose(logic.per_point_gains([0.0, 1.0], None, 4), [1.0, 2.0])
+    g = logic.per_point_gains([0.5, 1.0], [None, np.array([0, 0.5, 1, 1])], 4)
+    assert g.shape == (2, 4)
+    assert np.allclose(g[0], 1.5) and np.allclose(g[1], [1, 1.5, 2, 2])
+
+
+def test_detail_colors(logic):
+    c = logic.detail_colors(np.array([-2.0, -1.0, 0.0, 1.0, 2.0, np.nan]), scale=1.0)
+    assert np.allclose(c[0], [0, 0, 1, 1]) and np.allclose(c[1], [0, 0, 1, 1])
+    assert np.allclose(c[2], [1, 1, 1, 1]) and np.allclose(c[5], [1, 1, 1, 1])
+    assert np.allclose(c[3], [1, 0, 0, 1])
+
+
+def test_split_float64_is_nearly_exact(logic):
+    x = np.random.default_rng(1).standard_normal(1000) * 1e3 + 1e6
+    hi, lo = logic.split_float64(x)
+    assert hi.dtype == lo.dtype == np.float32
+    assert np.abs(logic.join_float64(hi, lo) - x).max() <= 1e-8 * np.abs(x).max()
+    assert np.abs(hi.astype(np.float64) - x).max() > 1e-3  # float32 alone would not do
+
+
+def test_pack_unpack_round_trip(logic):
+    n = 40
+    rng = np.random.default_rng(2)
+    d = {
+        "base": rng.standard_normal((n, 3)),
+        "details": rng.standard_normal((3, n)),
+        "labels": rng.integers(0, 9, (3, n)).astype(np.int32),
+        "neighborhoods_0": rng.integers(0, n, (7, 24)).astype(np.int32),
+        "kernel_0": rng.random(7),
+        "flags": rng.random(n) > 0.5,
+        "settings": np.frombuffer(b'{"a": 1}', dtype=np.uint8),
+        "format_version": np.array([1]),
+    }
+    columns, extras, meta = logic.pack_decomposition(d, n)
+    assert meta["details"]["where"] == "attr" and meta["details"]["transpose"]
+    assert meta["neighborhoods_0"]["where"] == "prop"
+    assert all(v.shape == (n,) for _, v in columns.values())
+    back = logic.unpack_decomposition(lambda name, kind: columns[name][1], extras, meta, n)
+    assert back.keys() == d.keys()
+    for key in d:
+        assert back[key].dtype == d[key].dtype and back[key].shape == d[key].shape, key
+        assert np.allclose(back[key], d[key], rtol=0, atol=1e-12), key
+
+
+def test_check_points(logic):
+    assert logic.check_points(np.zeros((10, 3))) is None
+    assert "3 vertices" in logic.check_points(np.zeros((3, 3)))
+    p = np.zeros((10, 3)); p[4, 1] = np.inf
+    assert "NaN" in logic.check_points(p) and "index 4" in logic.check_points(p)
+    assert "shape" in logic.check_points(np.zeros((10, 2)))
