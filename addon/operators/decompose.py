@@ -15,9 +15,15 @@ from .. import compute, engine, mesh_io, preferences, state, writeback
 from ..job import Job
 
 
+_running: set = set()  # names of objects with a decompose in flight
+
+
 def _problem(context):
     obj = context.active_object
-    return state.mesh_object_problem(obj) or state.engine_problem()
+    problem = state.mesh_object_problem(obj) or state.engine_problem()
+    if problem is None and obj.name in _running:
+        problem = f"'{obj.name}' is being decomposed already (Esc cancels)"
+    return problem
 
 
 def _prepare(op, context):
@@ -105,6 +111,7 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         self._timer = wm.event_timer_add(preferences.get(context).poll_interval, window=context.window)
         wm.modal_handler_add(self)
         wm.progress_begin(0, 100)
+        _running.add(self._obj_name)
         self._job.start()
         self._status(context)
         return {"RUNNING_MODAL"}
@@ -151,6 +158,7 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
             context.area.tag_redraw()
 
     def _cleanup(self, context):
+        _running.discard(self._obj_name)
         wm = context.window_manager
         if getattr(self, "_timer", None) is not None:
             wm.event_timer_remove(self._timer)
