@@ -83,4 +83,8 @@ def morph_keys(ps, a: np.ndarray, b: np.ndarray, base_points: np.ndarray | None 
             hi = np.maximum(a.max(axis=0), b.max(axis=0))
             base_points = logic.ellipsoid_points(lo, hi, samples)
     m = ps.morph(a, b, np.asarray(base_points, dtype=np.float64))
-    return m.evaluate(0.0, 0.0), m.evaluate(1.0, 0.0), m.evaluate(0.0, 1.0)
+    if hasattr(m, "evaluate"):
+        return m.evaluate(0.0, 0.0), m.evaluate(1.0, 0.0), m.evaluate(0.0, 1.0)
+    # Eq. 22 from the parts: p + (alpha d_A + beta d_B) n
+    p, n = np.asarray(m.base), np.asarray(m.normals)
+    return p, p + np.asarray(m.detail_a)[:, None] * n, p + np.asarray(m.detail_b)[:, None] * n
