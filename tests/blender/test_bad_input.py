@@ -5,7 +5,7 @@ import bpy
 import numpy as np
 import pytest
 
-import helpers as h
+import blender_helpers as h
 
 pytestmark = pytest.mark.blender
 

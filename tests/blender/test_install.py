@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import ROOT
+from blender_helpers import ROOT
 
 pytestmark = pytest.mark.blender
 

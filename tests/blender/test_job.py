@@ -10,7 +10,7 @@ import time
 import numpy as np
 import pytest
 
-from conftest import ADDON_NAME
+from blender_helpers import ADDON_NAME
 
 pytestmark = pytest.mark.blender
 
@@ -72,7 +72,7 @@ def test_errors_are_handed_to_the_main_thread(addon):
 def test_invoke_without_a_window_runs_synchronously():
     import bpy
 
-    import helpers as h
+    import blender_helpers as h
 
     obj = h.mesh_object(h.noisy_sphere(4000))
     assert bpy.ops.pointscale.decompose("INVOKE_DEFAULT") == {"FINISHED"}

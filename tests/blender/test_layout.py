@@ -4,8 +4,8 @@ import bpy
 import numpy as np
 import pytest
 
-import helpers as h
-from conftest import diagonal
+import blender_helpers as h
+from blender_helpers import diagonal
 
 pytestmark = pytest.mark.blender
 

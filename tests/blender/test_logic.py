@@ -5,7 +5,7 @@ import importlib
 import numpy as np
 import pytest
 
-from conftest import ADDON_NAME
+from blender_helpers import ADDON_NAME
 
 pytestmark = pytest.mark.blender
 

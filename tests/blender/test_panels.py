@@ -4,7 +4,7 @@ recording stand-in plays the layout) and explain what is missing."""
 import bpy
 import pytest
 
-import helpers as h
+import blender_helpers as h
 
 pytestmark = pytest.mark.blender
 

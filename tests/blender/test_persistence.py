@@ -4,7 +4,7 @@ import bpy
 import numpy as np
 import pytest
 
-import helpers as h
+import blender_helpers as h
 
 pytestmark = pytest.mark.blender
 

@@ -2,7 +2,7 @@
 
 import bpy
 
-from conftest import load_addon
+from blender_helpers import load_addon
 
 
 def _registered():

@@ -1,7 +1,33 @@
-"""Small bpy helpers for the Blender tests (bulk reads only)."""
+"""Small bpy helpers for the Blender tests (bulk reads only), and the add-on loader."""
+
+import importlib.util
+import sys
+from pathlib import Path
 
 import bpy
 import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+ADDON_NAME = "pointscale_addon"
+
+
+def load_addon():
+    if ADDON_NAME in sys.modules:
+        return sys.modules[ADDON_NAME]
+    spec = importlib.util.spec_from_file_location(
+        ADDON_NAME, ROOT / "addon" / "__init__.py", submodule_search_locations=[str(ROOT / "addon")]
+    )
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[ADDON_NAME] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+
+def diagonal(points) -> float:
+    points = np.asarray(points)
+    return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+
 
 
 def mesh_object(points, faces=(), name="Model"):
