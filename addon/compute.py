@@ -29,25 +29,39 @@ class Layout:
 
 def decompose_kwargs(ps, levels=4, decimation=0.25, kernel=1.0, neighbors=24, threads=0,
                      smoother="MLS", encoding="PROJECTION") -> dict:
-    """Keyword arguments for ``ps.decompose``; optional methods only when the engine has them."""
+    """Keyword arguments for :func:`decompose`; raises ValueError for a method this engine lacks."""
     kw = dict(levels=int(levels), decimation=float(decimation), kernel=float(kernel),
-              neighbors=int(neighbors), threads=int(threads))
-    params = inspect.signature(ps.decompose).parameters
-    for name, value, default in (("smoother", smoother, "MLS"), ("encoding", encoding, "PROJECTION")):
-        if value == default:
-            continue
-        if name not in params:
-            raise ValueError(f"this pointscale engine has no '{name}' option yet ({value.lower()} is unavailable)")
-        kw[name] = {"DIFFUSION": "diffusion", "RAY": "ray"}.get(value, value.lower())
+              neighbors=int(neighbors), threads=int(threads), smoother=smoother, encoding=encoding)
+    decompose_function(ps, smoother, encoding)  # fail early, on the main thread
     return kw
 
 
-def decompose(ps, points: np.ndarray, progress=None, **kwargs) -> Layout:
+def decompose_function(ps, smoother="MLS", encoding="PROJECTION"):
+    """(engine function, extra kwargs) for a smoother (MLS, DIFFUSION) and encoding (PROJECTION, RAY).
+
+    Projection encoding is ``ps.decompose`` (Sec. 7); ray shooting (Sec. 6.1) is
+    ``ps.decompose_rayshoot``, which also offers the diffusion smoother (Sec. 5.1).
+    """
+    smoother_arg = {"MLS": "mls", "DIFFUSION": "diffusion"}[smoother]
+    if encoding == "RAY":
+        fn = getattr(ps, "decompose_rayshoot", None)
+        if fn is None:
+            raise ValueError("this pointscale engine has no ray-shooting encoding (decompose_rayshoot) yet")
+        return fn, {"smoother": smoother_arg}
+    if smoother == "MLS":
+        return ps.decompose, {}
+    if "smoother" in inspect.signature(ps.decompose).parameters:
+        return ps.decompose, {"smoother": smoother_arg}
+    raise ValueError("the Diffusion smoother needs the Ray Shooting encoding in this pointscale engine")
+
+
+def decompose(ps, points: np.ndarray, progress=None, smoother="MLS", encoding="PROJECTION", **kwargs) -> Layout:
     """Decompose (n,3) points and extract the levels and normals the keys need."""
     problem = logic.check_points(points)
     if problem:
         raise ValueError(problem)
-    dec = ps.decompose(np.asarray(points, dtype=np.float64), progress=progress, **kwargs)
+    fn, extra = decompose_function(ps, smoother, encoding)
+    dec = fn(np.asarray(points, dtype=np.float64), progress=progress, **kwargs, **extra)
     k = dec.n_bands
     levels = np.stack([dec.level(l) for l in range(k)])
     normals = np.stack([dec.normals(l) for l in range(k)])
