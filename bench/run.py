@@ -163,6 +163,8 @@ def worker_pointscale(args: argparse.Namespace) -> int:
     dec_times = []
     peak = None
     for _ in range(max(1, args.reps)):
+        if dec_times and sum(dec_times) > args.rep_budget:
+            break  # slow input: the first run(s) already say enough
         dec = None  # free the previous result before the next run
         t0 = time.perf_counter()
         dec = pointscale.decompose(points, levels=args.levels, neighbors=args.neighbors,
@@ -180,6 +182,7 @@ def worker_pointscale(args: argparse.Namespace) -> int:
         "threads": args.threads,
         "decompose_s": t_dec,
         "decompose_all_s": dec_times,
+        "decompose_reps": len(dec_times),
         "maxrss_baseline_kib": base_max,
         "rss_baseline_kib": base_now,
         "maxrss_peak_kib": peak,
@@ -271,6 +274,17 @@ def render(rows: list[dict], args: argparse.Namespace) -> str:
         a = ps.get("decompose_s")
         b = pc.get("process_s")
         ratio = (a / b) if (a is not None and b) else None
+        a_cell = fmt(a, ".3f", "FAILED" if r.get("ps_err") else "n/a")
+        b_cell = fmt(b, ".3f", "FAILED" if r.get("pcl_err") else "n/a")
+        ratio_cell = fmt(ratio, ".2f")
+        if ps and ps.get("decompose_reps", 1) < args.reps:
+            a_cell += f" ({ps['decompose_reps']} run{'s' if ps['decompose_reps'] > 1 else ''})"
+        if r.get("ps_timeout"):
+            a_cell = f"> {r['ps_timeout']:.0f} (timeout)"
+            if b:
+                ratio_cell = f"> {r['ps_timeout'] / b:.0f}"
+        if r.get("pcl_timeout"):
+            b_cell = f"> {r['pcl_timeout']:.0f} (timeout)"
         rad = (f"{pc['radius']:.4g} / {pc['mean_neighbors']:.1f}" if pc else "n/a")
         recon = ("n/a" if ps.get("reconstruct_median_ms") is None else
                  f"{ps['reconstruct_median_ms']:.1f} / {ps['reconstruct_first_ms']:.1f}")
@@ -279,8 +293,7 @@ def render(rows: list[dict], args: argparse.Namespace) -> str:
             pcl_mem = (pc["maxrss_after_kib"] - pc["maxrss_before_kib"]) * 1024.0 / pc["n"]
         out.append(
             f"| {r['name']} | {r['n']:,} | {args.neighbors} | "
-            f"{fmt(a, '.3f', r.get('ps_err') or 'n/a')} | {fmt(b, '.3f', r.get('pcl_err') or 'n/a')} | "
-            f"{rad} | {fmt(ratio, '.2f')} | {recon} | "
+            f"{a_cell} | {b_cell} | {rad} | {ratio_cell} | {recon} | "
             f"{fmt(ps.get('reconstruct_max_err_rel'), '.1e')} | "
             f"{fmt(ps.get('peak_bytes_per_point'), '.0f')} | {fmt(pcl_mem, '.0f')} |")
     return "\n".join(out)
@@ -306,7 +319,8 @@ def verdicts(rows: list[dict]) -> list[str]:
     huge = [r for r in rows if r["kind"] == "synthetic" and r["n"] >= 10_000_000]
     for r in huge:
         ok = bool(r.get("ps"))
-        lines.append(f"{size_label(r['n'])} decompose: {'completed' if ok else 'FAILED: ' + str(r.get('ps_err'))}")
+        lines.append(f"{size_label(r['n'])} decompose: "
+                     f"{'completed' if ok else 'FAILED: ' + str(r.get('ps_err'))}")
     return lines
 
 
@@ -369,7 +383,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--reps", type=int, default=None,
                    help="decompose and PCL passes per cloud, median reported (default 3; "
                         "1 with --quick and for >= 10M points)")
-    p.add_argument("--timeout", type=float, default=1800.0, help="per-measurement timeout (s)")
+    p.add_argument("--timeout", type=float, default=900.0,
+                   help="per-subprocess timeout in s (default 900); a timed-out cell reads '> T'")
+    p.add_argument("--rep-budget", type=float, default=60.0,
+                   help="stop repeating a decompose once its runs took this many s (default 60)")
     p.add_argument("--json", type=Path, help="also write all raw results to this file")
     p.add_argument("--worker-pointscale", help=argparse.SUPPRESS)
     args = p.parse_args(argv)
@@ -451,6 +468,7 @@ def main(argv: list[str] | None = None) -> int:
                      "--reps", str(reps)],
                     args.timeout)
                 row["pcl"], row["pcl_err"] = res, (err or None)
+                row["pcl_timeout"] = args.timeout if err.startswith("timed out") else None
                 if res:
                     print(f"  PCL MLS: {res['process_s']:.3f} s {res['process_all_s']} (radius {res['radius']:.4g}, mean "
                           f"{res['mean_neighbors']:.2f} / median {res['median_neighbors']} neighbours, "
@@ -465,9 +483,10 @@ def main(argv: list[str] | None = None) -> int:
                     [sys.executable, str(Path(__file__).resolve()), "--worker-pointscale", str(npy),
                      "--neighbors", str(args.neighbors), "--levels", str(args.levels),
                      "--threads", str(args.threads), "--recon-reps", str(args.recon_reps),
-                     "--reps", str(reps)],
+                     "--reps", str(reps), "--rep-budget", str(args.rep_budget)],
                     args.timeout)
-                row["ps"], row["ps_err"] = res, ("FAILED" if err else None)
+                row["ps"], row["ps_err"] = res, (err or None)
+                row["ps_timeout"] = args.timeout if err.startswith("timed out") else None
                 if res:
                     msg = (f"  pointscale decompose: {res['decompose_s']:.3f} s "
                            f"{[round(t, 3) for t in res['decompose_all_s']]}, peak "
@@ -486,7 +505,8 @@ def main(argv: list[str] | None = None) -> int:
     print(render(rows, args))
     print()
     print("(a) pointscale.decompose(points, levels=%d, neighbors=%d, threads=%d), wall time, "
-          "median of %d;" % (args.levels, args.neighbors, args.threads, args.reps))
+          "median of %d (fewer where marked: runs stop after --rep-budget %.0f s);"
+          % (args.levels, args.neighbors, args.threads, args.reps, args.rep_budget))
     print("(b) pcl::MovingLeastSquares<PointXYZ, PointNormal>, order 1, radius calibrated to a mean of "
           "K neighbours, %d threads, process() only, median of %d;" % (args.threads, args.reps))
     print("reconstruct = pointscale.reconstruct(dec, base=dec.base); peak mem = ru_maxrss delta "
@@ -495,6 +515,10 @@ def main(argv: list[str] | None = None) -> int:
         print("pointscale:", ps_why)
     if peer is None:
         print("PCL:", pcl_why)
+    for r in rows:
+        for side in ("ps", "pcl"):
+            if r.get(side + "_err"):
+                print(f"{r['name']}: {'pointscale' if side == 'ps' else 'PCL'} failed: {r[side + '_err']}")
     v = verdicts(rows)
     if v:
         print()
