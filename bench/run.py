@@ -405,6 +405,8 @@ def main(argv: list[str] | None = None) -> int:
     print("# pointscale vs PCL MovingLeastSquares")
     print("machine:", machine_line())
     print("command:", "python bench/run.py" + ("" if not sys.argv[1:] else " " + " ".join(sys.argv[1:])))
+    print("load average at start:", open("/proc/loadavg").read().split()[:3],
+          "(others' processes on this machine disturb timings)")
     print(f"K={args.neighbors} levels={args.levels} threads={args.threads} "
           f"reps={args.reps} (median) reconstruct reps={args.recon_reps}", flush=True)
 
@@ -515,6 +517,7 @@ def main(argv: list[str] | None = None) -> int:
         print("pointscale:", ps_why)
     if peer is None:
         print("PCL:", pcl_why)
+    print("load average at end:", open("/proc/loadavg").read().split()[:3])
     for r in rows:
         for side in ("ps", "pcl"):
             if r.get(side + "_err"):
