@@ -1,0 +1,61 @@
+"""A real scan with faces, imported with Blender's own PLY importer (skips without ../shared/data)."""
+
+import importlib
+import os
+from pathlib import Path
+
+import bpy
+import numpy as np
+import pytest
+
+import blender_helpers as h
+from blender_helpers import ADDON_NAME, ROOT, diagonal
+
+pytestmark = [pytest.mark.blender, pytest.mark.data]
+
+DATA = Path(os.environ.get("POINTSCALE_DATA", ROOT.parent / "shared" / "data"))
+
+
+@pytest.fixture
+def fandisk():
+    path = DATA / "fandisk.ply"
+    if not path.exists():
+        pytest.skip(f"fandisk.ply not found in {DATA}")
+    bpy.ops.wm.ply_import(filepath=str(path))
+    obj = bpy.context.active_object
+    me = obj.data
+    counts = (len(me.vertices), len(me.polygons))
+    before = h.vertices(me).copy()
+    h.decompose(obj, levels=4)
+    return obj, before, counts
+
+
+def test_scan_keeps_faces_basis_and_filters(fandisk):
+    obj, before, counts = fandisk
+    me = obj.data
+    assert counts == (6475, 12946)
+    assert (len(me.vertices), len(me.polygons)) == counts  # faces kept as they are
+    assert np.array_equal(h.key(me, "Basis"), before)
+    tol = 1e-6 * diagonal(before)
+    assert np.abs(h.evaluated(obj) - before).max() <= tol
+    me.multiscale.bands[2].gain = 0.0  # remove the finest band
+    assert np.abs(h.evaluated(obj) - before).max() > 100 * tol
+    for band in me.multiscale.bands:
+        band.gain = 0.0
+    assert np.abs(h.evaluated(obj) - h.key(me, "Level 0")).max() <= tol
+
+
+def test_scan_rebuild_on_unedited_base_gives_the_scan(fandisk):
+    import pointscale as ps
+
+    obj, before, _ = fandisk
+    me = obj.data
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    error = np.abs(h.key(me, "Multiscale Edit") - before).max() / diagonal(before)
+    if error > 1e-5:
+        dec = importlib.import_module(ADDON_NAME + ".writeback").decomposition(me, ps)
+        engine_error = np.abs(ps.reconstruct(dec, base=dec.base) - ps.reconstruct(dec)).max() / diagonal(before)
+        if engine_error > 1e-5:
+            pytest.xfail(f"engine: reconstruct(dec, base=dec.base) differs from reconstruct(dec) by "
+                         f"{engine_error:.3g} of the diagonal on this scan (reported to the engine owner)")
+    assert error <= 1e-5
