@@ -34,7 +34,7 @@ class POINTSCALE_OT_edit_base(DecomposedOperator, bpy.types.Operator):
             kb = keys.get(mesh, name)
             if kb is not None:
                 kb.value = 0.0
-        if self.mode != "OBJECT" and not bpy.app.background:
+        if self.mode != "OBJECT":
             bpy.ops.object.mode_set(mode=self.mode)
         return {"FINISHED"}
 

@@ -64,3 +64,35 @@ def test_rebuild_detail_keeps_handles_normal_to_the_edited_base():
     assert np.abs(h.evaluated(obj) - result).max() < 1e-5
     # The Basis is still the original.
     assert np.array_equal(h.key(me, "Basis"), original.astype(np.float32))
+
+
+def test_edit_mode_workflow_writes_level0_and_rebuilds():
+    """The artist's path: Edit Base (Edit mode on 'Level 0'), move vertices, Rebuild Detail."""
+    import bmesh
+
+    obj = h.mesh_object(h.noisy_sphere(4000), name="EditMe")
+    h.decompose(obj, levels=4)
+    me = obj.data
+    level0 = h.key(me, "Level 0").copy()
+    assert bpy.ops.pointscale.edit_base(mode="EDIT") == {"FINISHED"}
+    assert obj.mode == "EDIT" and obj.active_shape_key.name == "Level 0"
+    bm = bmesh.from_edit_mesh(me)
+    top = []
+    for v in bm.verts:
+        if v.co.z > 0.5:
+            v.co.z += 0.3
+            top.append(v.index)
+    bmesh.update_edit_mesh(me)
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}  # leaves Edit mode itself
+    assert obj.mode == "OBJECT"
+    top = np.array(top)
+    edited = h.key(me, "Level 0")
+    assert np.allclose(edited[top, 2], level0[top, 2] + 0.3, atol=1e-5)  # the edit went to Level 0
+    result = h.key(me, "Multiscale Edit")
+    basis = h.key(me, "Basis")
+    lift = result[top, 2] - basis[top, 2]
+    assert np.median(lift) == pytest.approx(0.3, abs=0.03)
+    rest = np.setdiff1d(np.arange(len(basis)), top)
+    far = rest[basis[rest, 2] < -0.5]
+    moved = np.linalg.norm(result[far] - basis[far], axis=1)
+    assert np.median(moved) < 0.01 * 0.3 and moved.max() < 0.05 * 0.3  # far from the edit, little moves
