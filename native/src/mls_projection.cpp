@@ -14,6 +14,9 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   const int k = std::min<int>(options.neighbors, support.size());
   const Points& s = support.points();
   const Eigen::VectorXd inv_h2 = h.array().square().inverse();
+  // Anisotropic weights: |d|^2 + (1/sheet^2 - 1)(n.d)^2 in place of |d|^2.
+  const Points* sheet_normals = options.support_normals;
+  const double sheet_extra = sheet_normals ? 1.0 / (options.sheet * options.sheet) - 1.0 : 0.0;
   MlsResult out;
   out.positions.resize(n, 3);
   out.normals.resize(n, 3);
@@ -31,6 +34,14 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
       for (int it = 0; it < options.max_iterations; ++it) {
         const int found = support.knn(foot.data(), k, idx.data(), d2.data());
         for (int j = 0; j < found; ++j) ih2[j] = inv_h2(idx[j]);
+        if (sheet_normals) {
+          for (int j = 0; j < found; ++j) {
+            // Measured from the point being projected, not the moving foot, so that the foot
+            // cannot drift towards the other sheet and take the weights along.
+            const double along = sheet_normals->row(idx[j]).dot(s.row(idx[j]) - p.transpose());
+            d2[j] += sheet_extra * along * along;
+          }
+        }
         gaussian_weights(d2.data(), ih2.data(), found, w.data());
         const PlaneFit fit = fit_weighted_plane(s, idx.data(), w.data(), found, foot);
         if (!fit.ok) break;

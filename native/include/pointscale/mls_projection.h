@@ -11,6 +11,12 @@ struct MlsOptions {
   int neighbors = 24;         // support points in each plane fit
   double tolerance = 1e-7;    // convergence: foot-point step below tolerance x h
   int max_iterations = 30;    // iteration cap per point
+  // Thin sheets: given the support points' normals (#S by 3, sign ignored), a support point's
+  // weight also falls with the distance of the projected point x from it along its own normal,
+  // as exp(-(n_j.(p_j - x))^2 / (sheet h_j)^2), so two sheets closer than h (but more than about
+  // 2 sheet h apart) are not averaged into one. nullptr keeps isotropic weights.
+  const Points* support_normals = nullptr;
+  double sheet = 0.2;         // normal kernel width as a fraction of h, in (0, 1]
 };
 
 struct MlsResult {

@@ -1,0 +1,162 @@
+#include "pointscale/ray_shooting.h"
+
+#include <cmath>
+#include <limits>
+
+#include "pointscale/parallel.h"
+#include "pointscale/plane_fit.h"
+
+namespace pointscale {
+
+RayHits shoot_rays(const Points& origins, const Points& directions, const SpatialIndex& support,
+                   const Eigen::VectorXd& h, const RayOptions& options, const ProgressStage& stage) {
+  const Eigen::Index n = origins.rows();
+  const int k = std::min<int>(options.neighbors, support.size());
+  const Points& s = support.points();
+  const Eigen::VectorXd inv_h2 = h.array().square().inverse();
+  const double limit = options.max_distance > 0 ? options.max_distance : std::numeric_limits<double>::infinity();
+  RayHits out;
+  out.positions = origins;
+  out.distances = Eigen::VectorXd::Zero(n);
+  out.missed.assign(static_cast<std::size_t>(n), 0);
+
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+    std::vector<Index> idx(k);
+    std::vector<double> d2(k), ih2(k), w(k);
+    for (std::size_t ii = b; ii < e; ++ii) {
+      const Eigen::Index i = static_cast<Eigen::Index>(ii);
+      const Vec3 o = origins.row(i).transpose();
+      const Vec3 d = directions.row(i).transpose();
+      double t = 0.0, last_step = std::numeric_limits<double>::infinity(), damping = 1.0;
+      bool hit = false;
+      for (int it = 0; it < options.max_iterations; ++it) {
+        const Vec3 x = o + t * d;
+        const int found = support.knn(x.data(), k, idx.data(), d2.data());
+        for (int j = 0; j < found; ++j) ih2[j] = inv_h2(idx[j]);
+        gaussian_weights(d2.data(), ih2.data(), found, w.data());
+        const PlaneFit fit = fit_weighted_plane(s, idx.data(), w.data(), found, x);
+        if (!fit.ok) break;
+        const double cosine = fit.normal.dot(d);
+        if (std::abs(cosine) < options.min_cosine) break;  // the ray runs along the surface here
+        const double next = t + (fit.mean - x).dot(fit.normal) / cosine;
+        const double step = std::abs(next - t);
+        // The plane can tilt back and forth between iterations: damp a growing step.
+        if (step > last_step) damping = std::max(damping * 0.5, 1.0 / 64.0);
+        last_step = step;
+        t += damping * (next - t);
+        if (!(std::abs(t) <= limit)) break;
+        if (step <= options.tolerance * h(idx[0])) { hit = true; break; }
+      }
+      if (hit) {
+        out.positions.row(i) = (o + t * d).transpose();
+        out.distances(i) = t;
+      } else {
+        out.missed[ii] = 1;
+      }
+    }
+  }, stage, 128);
+  for (unsigned char m : out.missed) out.miss_count += m;
+  return out;
+}
+
+}  // namespace pointscale
+
+#include <cmath>
+
+#include "pointscale/cluster_decimation.h"
+#include "pointscale/encoding.h"
+#include "pointscale/sample_spacing.h"
+
+namespace pointscale {
+
+Points smoothed_support(const Points& fine, std::size_t target, double max_variation,
+                        const DiffusionOptions* diffusion) {
+  Clustering clusters = cluster_decimate(fine, target, max_variation);
+  if (!diffusion) return std::move(clusters.centroids);
+  return diffuse(clusters.centroids, *diffusion);
+}
+
+MultiscaleModel decompose_rayshoot(const Points& points, const Points* input_normals, const DecomposeOptions& options,
+                                   const DiffusionOptions* diffusion, const RayOptions& rays, double fine_kernel,
+                                   RayshootReport& report, const ProgressCallback* progress) {
+  const Eigen::Index n = points.rows();
+  const int k = options.levels - 1;
+  const ProgressStage all{progress, 0.0, 1.0};
+  std::vector<Points> smooth(k + 1), surface(k + 1);
+  std::vector<Eigen::VectorXd> kernel(k + 1);
+  smooth[k] = points;
+  surface[k] = points;
+  kernel[k] = fine_kernel * local_spacing(SpatialIndex(points), 6);
+
+  // Top-down: the scale space and the surfaces S^l.
+  for (int step = 0; step < k; ++step) {
+    const int l = k - step;
+    const ProgressStage stage = all.sub(0.5 * step / k, 0.5 * (step + 1) / k);
+    const auto target = static_cast<std::size_t>(std::floor(std::pow(options.decimation, step + 1) * n));
+    surface[l - 1] = smoothed_support(smooth[l], target, options.max_variation, diffusion);
+    const SpatialIndex index(surface[l - 1]);
+    kernel[l - 1] = options.kernel * local_spacing(index, 6);
+    smooth[l - 1] = mls_project(smooth[l], index, kernel[l - 1], options.mls, stage.sub(0.1, 1.0)).positions;
+  }
+
+  // Bottom-up: shoot from each level along its normals onto the next finer surface.
+  MultiscaleModel model;
+  model.support.resize(k);
+  model.reports.resize(k);
+  model.details.resize(k, n);
+  report.missed.assign(k, 0);
+  report.missed_points.assign(k, {});
+  Points level = std::move(smooth[0]);
+  Points reference;
+  for (int l = 0; l < k; ++l) {
+    const ProgressStage stage = all.sub(0.5 + 0.5 * l / k, 0.5 + 0.5 * (l + 1) / k);
+    // Anchors: the member nearest its cluster's centroid.
+    const auto target = static_cast<std::size_t>(surface[l].rows());
+    Clustering clusters = cluster_decimate(level, target, options.max_variation);
+    Points centre(n, 3);
+    for (Eigen::Index i = 0; i < n; ++i) centre.row(i) = clusters.centroids.row(clusters.labels[i]);
+    LevelSupport& support = model.support[l];
+    support.labels = std::move(clusters.labels);
+    support.clusters = static_cast<Index>(clusters.centroids.rows());
+    support.neighbors = std::min<int>(options.mls.neighbors, support.clusters);
+    choose_anchors(centre, level, support);
+    const Points anchors = support_centroids(level, support);
+    const SpatialIndex anchor_index(anchors);
+    support.h = options.kernel * local_spacing(anchor_index, 6);
+    support.neighborhoods = knn_graph(anchor_index, support.neighbors);
+    attach_frames(anchors, level, support);
+
+    if (l == 0) reference = input_normals ? *input_normals : orientation_reference(level, support);
+    Points normals = level_normals(level, support, reference);
+    const SpatialIndex target_index(surface[l + 1]);
+    RayOptions ray_options = rays;
+    RayHits hits = shoot_rays(level, normals, target_index, kernel[l + 1], ray_options, stage.sub(0.2, 0.9));
+    if (hits.miss_count > 0) {
+      // Fall back to the orthogonal projection, measured along the normal.
+      IndexList missed;
+      for (Eigen::Index i = 0; i < n; ++i) if (hits.missed[i]) missed.push_back(static_cast<Index>(i));
+      Points origins(static_cast<Eigen::Index>(missed.size()), 3);
+      for (std::size_t m = 0; m < missed.size(); ++m) origins.row(m) = level.row(missed[m]);
+      const MlsResult fallback = mls_project(origins, target_index, kernel[l + 1], options.mls);
+      for (std::size_t m = 0; m < missed.size(); ++m) {
+        const Index i = missed[m];
+        hits.distances(i) = (fallback.positions.row(m) - level.row(i)).dot(normals.row(i));
+      }
+      report.missed[l] = hits.miss_count;
+      report.missed_points[l] = std::move(missed);
+    }
+    for (Eigen::Index i = 0; i < n; ++i) model.details(l, i) = hits.distances(i);
+    if (l == 0) { model.base = level; model.base_normals = normals; }
+    LevelReport& r = model.reports[l];
+    r.support_points = static_cast<std::size_t>(support.clusters);
+    r.kernel_width = kernel[l].size() ? kernel[l].mean() : 0.0;
+    r.not_converged = hits.miss_count;
+    // The next level: exactly the displaced points, as reconstruction will rebuild them.
+    for (Eigen::Index i = 0; i < n; ++i) level.row(i) += model.details(l, i) * normals.row(i);
+    reference = std::move(normals);
+  }
+  all.report(1.0);
+  return model;
+}
+
+}  // namespace pointscale
