@@ -146,6 +146,8 @@ MultiscaleModel model_from_arrays(const py::dict& d) {
 
 }  // namespace
 
+void bind_operators(py::module_& m);  // operators.cpp
+
 PYBIND11_MODULE(_core, m) {
   m.doc() = "Pointscale native core. Use the pointscale package, which checks inputs, instead of this module.";
   py::register_exception<Cancelled>(m, "Cancelled");
@@ -229,4 +231,6 @@ PYBIND11_MODULE(_core, m) {
       return normals;
     });
   });
+
+  bind_operators(m);
 }

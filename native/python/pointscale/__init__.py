@@ -6,10 +6,14 @@ detail can be filtered band by band, carried along a deformed base, or moved bet
 from ._core import Cancelled
 from .multiscale import Decomposition, blend, decompose, load, reconstruct, reconstruct_levels
 from .surface import decimate, estimate_normals, project
+from .operators import (Morph, decompose_rayshoot, diffusion_levels, ellipsoid_base, encode, morph, project_sheets,
+                        rays_missed_points, shoot_rays, smooth_diffusion)
 from . import shapes
 
 __version__ = "0.1.0"
 __all__ = [
     "Cancelled", "Decomposition", "blend", "decimate", "decompose", "estimate_normals", "load",
     "project", "reconstruct", "reconstruct_levels", "shapes",
+    "Morph", "decompose_rayshoot", "diffusion_levels", "ellipsoid_base", "encode", "morph", "project_sheets",
+    "rays_missed_points", "shoot_rays", "smooth_diffusion",
 ]

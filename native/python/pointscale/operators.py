@@ -1,0 +1,315 @@
+"""The paper's further operators: diffusion smoothing (Sec. 5.1), ray-shooting encoding (Sec. 6.1),
+encoding onto a given base (Sec. 8.2, Fig. 8), morphing (Sec. 8.3, Eq. 22), and a projection that
+keeps thin sheets apart.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _core
+from ._checks import as_callback, as_points, centre, positive, require_surface
+from .multiscale import MIN_COARSE_POINTS, Decomposition
+
+
+def _diffusion_settings(lam, mu, taubin, neighbors):
+    """Checks the diffusion parameters; returns (neighbors, lam, mu)."""
+    lam = positive(lam, "lam")
+    if lam > 1.0:
+        raise ValueError(f"lam must be in (0, 1] for a stable explicit step, got {lam}")
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3)
+    if mu is None:
+        mu = _core.taubin_mu(lam, 0.1) if taubin else 0.0
+    else:
+        try:
+            mu = float(mu)
+        except (TypeError, ValueError):
+            raise ValueError(f"mu must be a number below -lam, got {mu!r}") from None
+        if not np.isfinite(mu) or mu >= -lam:
+            raise ValueError(f"mu must be below -lam = {-lam} (Taubin's inflating step), got {mu}")
+    return neighbors, lam, mu
+
+
+def smooth_diffusion(points, iterations: int = 10, *, lam: float = 0.5, taubin: bool = False, mu=None,
+                     neighbors: int = 10, threads: int = 0, progress=None) -> np.ndarray:
+    """Laplacian diffusion smoothing of a point cloud (Sec. 5.1, Eq. 12): p' = p + lam * L(p).
+
+    L(p) is the mean of p's k nearest neighbours minus p, over neighbourhoods computed once on the
+    input and kept (so points cannot drift into clusters).
+    iterations  number of steps
+    lam         step in (0, 1]
+    taubin      alternate each step with a negative one, mu = 1 / (0.1 - 1/lam) (Taubin 1995),
+                which keeps the volume that plain Laplacian smoothing shrinks away
+    mu          Taubin's negative step, below -lam; overrides taubin
+    neighbors   k, the point itself included
+    Returns the smoothed (n, 3) points, indexed like the input.
+    """
+    iterations = positive(iterations, "iterations", integer=True)
+    neighbors, lam, mu = _diffusion_settings(lam, mu, taubin, neighbors)
+    p = as_points(points, min_count=neighbors)
+    origin = centre(p)
+    _core.set_threads(int(threads))
+    return _core.diffuse(p - origin, neighbors, lam, mu, iterations, as_callback(progress)) + origin
+
+
+def diffusion_levels(points, levels: int = 4, *, iterations: int = 10, growth: float = 4.0, lam: float = 0.5,
+                     taubin: bool = False, mu=None, neighbors: int = 10, threads: int = 0) -> np.ndarray:
+    """A discrete scale space by diffusion: (levels, n, 3), level 0 the smoothest, the last the input.
+
+    Level l-1 is level l smoothed by iterations * growth**(k-l) more steps, so the diffusion time
+    grows geometrically towards the coarse levels, like the kernel widths of decompose().
+    """
+    levels = positive(levels, "levels", integer=True, minimum=2)
+    iterations = positive(iterations, "iterations", integer=True)
+    growth = positive(growth, "growth", minimum=1.0)
+    neighbors, lam, mu = _diffusion_settings(lam, mu, taubin, neighbors)
+    p = as_points(points, min_count=neighbors)
+    origin = centre(p)
+    _core.set_threads(int(threads))
+    out = [p - origin]
+    for step in range(levels - 1):
+        steps = int(round(iterations * growth ** step))
+        out.append(_core.diffuse(out[-1], neighbors, lam, mu, steps, None))
+    levels_out = np.stack(out[::-1]) + origin
+    levels_out[-1] = p  # the input itself, without a centring round trip
+    return levels_out
+
+
+def project_sheets(points, onto, *, kernel: float = 1.0, sheet: float = 0.2, onto_normals=None,
+                   neighbors: int = 24, tolerance: float = 1e-9, max_iterations: int = 50, threads: int = 0,
+                   progress=None, return_report: bool = False):
+    """MLS projection that keeps thin sheets apart (two sheets closer than the kernel width).
+
+    Like project(), but a support point's weight also falls with its distance along its own
+    normal, with width sheet * h: points of a parallel sheet 0.5 h away weigh about
+    exp(-(0.5/sheet)**2) as much, so each sheet projects onto itself instead of onto their mean.
+    onto_normals  (m, 3) normals of `onto` (sign ignored); None estimates them from 16 neighbours
+    Returns (positions, normals) and, with return_report, a dict like project().
+    """
+    x = as_points(points)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3)
+    s = as_points(onto, "onto", min_count=3)
+    require_surface(s, "onto", allow_planar=True)
+    kernel = positive(kernel, "kernel")
+    sheet = positive(sheet, "sheet")
+    if sheet > 1.0:
+        raise ValueError(f"sheet must be in (0, 1] (a fraction of the kernel width), got {sheet}")
+    tolerance = positive(tolerance, "tolerance")
+    max_iterations = positive(max_iterations, "max_iterations", integer=True)
+    nrm = None
+    if onto_normals is not None:
+        nrm = as_points(onto_normals, "onto_normals")
+        if nrm.shape != s.shape:
+            raise ValueError(f"onto_normals must have the shape of onto {s.shape}, got {nrm.shape}")
+        if not (np.linalg.norm(nrm, axis=1) > 0).all():
+            raise ValueError("onto_normals contains zero vectors")
+        nrm = nrm / np.linalg.norm(nrm, axis=1)[:, None]
+    origin = centre(s)
+    _core.set_threads(int(threads))
+    pos, n, not_converged, degenerate = _core.project_sheets(x - origin, s - origin, nrm, kernel, neighbors,
+                                                             tolerance, max_iterations, sheet, as_callback(progress))
+    pos = pos + origin
+    if return_report:
+        return pos, n, {"not_converged": int(not_converged), "degenerate": int(degenerate)}
+    return pos, n
+
+
+def shoot_rays(origins, directions, onto, *, kernel: float = 1.0, neighbors: int = 24, max_distance=None,
+               tolerance: float = 1e-9, max_iterations: int = 50, threads: int = 0):
+    """Intersects rays with the MLS surface of `onto` (Adamson and Alexa 2003).
+
+    origins, directions  (r, 3); directions need not be unit. Rays are whole lines.
+    max_distance         a hit farther than this from its origin counts as a miss (None: no limit)
+    Returns (hits (r, 3), distances (r,) signed along the unit directions, missed (r,) bool).
+    Missed rays keep their origin and distance 0: check `missed`, nothing is dropped.
+    """
+    o = as_points(origins, "origins")
+    d = as_points(directions, "directions")
+    if d.shape != o.shape:
+        raise ValueError(f"directions must have the shape of origins {o.shape}, got {d.shape}")
+    length = np.linalg.norm(d, axis=1)
+    if not (length > 0).all():
+        raise ValueError(f"directions contains {int((length == 0).sum())} zero vectors")
+    s = as_points(onto, "onto", min_count=3)
+    require_surface(s, "onto", allow_planar=True)
+    kernel = positive(kernel, "kernel")
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3)
+    limit = 0.0 if max_distance is None else positive(max_distance, "max_distance")
+    origin = centre(s)
+    _core.set_threads(int(threads))
+    hits, dist, missed = _core.shoot_rays(o - origin, d / length[:, None], s - origin, kernel, neighbors,
+                                          positive(tolerance, "tolerance"),
+                                          positive(max_iterations, "max_iterations", integer=True), limit, 0.05)
+    return hits + origin, dist, missed
+
+
+def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neighbors: int = 24,
+           tolerance: float = 1e-9, max_iterations: int = 50, max_variation: float = 0.05, threads: int = 0,
+           progress=None) -> Decomposition:
+    """Encodes a model onto a user-given base surface (Sec. 8.2, Fig. 8): a one-band Decomposition.
+
+    points       (n, 3) the model
+    base_points  (m, 3) samples of the base, e.g. ellipsoid_base(points); the model may lie many
+                 kernel widths away from it
+    base_normals (m, 3) optional, orients the base (else outward by propagation)
+    kernel       kernel width as a multiple of the base's local sample spacing
+    reconstruct(dec, [0]) lies on the base's MLS surface, reconstruct(dec, [1]) is the model,
+    other gains blend or exaggerate (Fig. 8). stats[0]["consistency_residual"] tells how exactly
+    the offsets follow the recomputed normals.
+    """
+    p = as_points(points, min_count=MIN_COARSE_POINTS)
+    b = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)
+    require_surface(b, "base_points", allow_planar=True)
+    kernel = positive(kernel, "kernel")
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4)
+    tolerance = positive(tolerance, "tolerance")
+    max_iterations = positive(max_iterations, "max_iterations", integer=True)
+    max_variation = positive(max_variation, "max_variation")
+    bn = None
+    if base_normals is not None:
+        bn = as_points(base_normals, "base_normals")
+        if bn.shape != b.shape:
+            raise ValueError(f"base_normals must have the shape of base_points {b.shape}, got {bn.shape}")
+    origin = centre(np.vstack([p, b]))
+    _core.set_threads(int(threads))
+    model = _core.encode(p - origin, b - origin, bn, kernel, neighbors, tolerance, max_iterations, max_variation,
+                         as_callback(progress))
+    settings = dict(levels=2, encoding="base", kernel=kernel, neighbors=neighbors, tolerance=tolerance,
+                    max_iterations=max_iterations, max_variation=max_variation, base_points=len(b))
+    return Decomposition(model, origin, settings)
+
+
+def ellipsoid_base(points_a, points_b=None, n: int = 20000) -> np.ndarray:
+    """n samples of the largest axis-aligned ellipsoid inside the common bounding box of the
+    models, the base the paper used for Fig. 8 and 9. Returns (n, 3)."""
+    n = positive(n, "n", integer=True, minimum=MIN_COARSE_POINTS)
+    a = as_points(points_a, "points_a")
+    pts = a if points_b is None else np.vstack([a, as_points(points_b, "points_b")])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    axes = 0.5 * (hi - lo)
+    if not (axes > 1e-9 * axes.max()).all():
+        raise ValueError(f"the bounding box is flat (extent {2 * axes}): it holds no ellipsoid")
+    from .shapes import fibonacci_sphere
+    return 0.5 * (lo + hi) + fibonacci_sphere(n) * axes
+
+
+@dataclass
+class Morph:
+    """Both models over a common base (Sec. 8.3), on A's samples: p(alpha, beta) of Eq. 22."""
+
+    base: np.ndarray       #: (n_a, 3) A's samples projected onto the base
+    normals: np.ndarray    #: (n_a, 3) oriented base normals there
+    detail_a: np.ndarray   #: (n_a,) A's normal offsets: base + detail_a * normals == A
+    detail_b: np.ndarray   #: (n_a,) B's offsets, interpolated onto A's samples
+    report: dict           #: projections that did not converge or had no plane
+
+    def evaluate(self, alpha: float = 1.0, beta: float = 0.0) -> np.ndarray:
+        """p_i + (alpha d_i^A + beta d_i^B) n_i: (1, 0) is A, (0, 1) is B on A's samples; any
+        real alpha and beta, not only convex combinations (Fig. 10a). Returns (n_a, 3)."""
+        try:
+            alpha, beta = float(alpha), float(beta)
+        except (TypeError, ValueError):
+            raise ValueError(f"alpha and beta must be numbers, got {alpha!r}, {beta!r}") from None
+        if not (np.isfinite(alpha) and np.isfinite(beta)):
+            raise ValueError(f"alpha and beta must be finite, got {alpha}, {beta}")
+        return self.base + (alpha * self.detail_a + beta * self.detail_b)[:, None] * self.normals
+
+
+def morph(points_a, points_b, base_points, *, base_normals=None, kernel: float = 1.0, neighbors: int = 24,
+          interpolation_neighbors: int = 8, tolerance: float = 1e-9, max_iterations: int = 50, threads: int = 0,
+          progress=None) -> Morph:
+    """Morph between two models through a common base surface (Sec. 8.3, Eq. 22).
+
+    points_a, points_b  (n_a, 3), (n_b, 3); the counts may differ. Align and scale them first.
+    base_points         samples of a base close to both, e.g. ellipsoid_base(points_a, points_b)
+    Both are projected onto the base; B's offsets are carried onto A's samples by Gaussian-weighted
+    interpolation over the interpolation_neighbors nearest projected B samples.
+    """
+    a = as_points(points_a, "points_a")
+    b = as_points(points_b, "points_b")
+    s = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)
+    require_surface(s, "base_points", allow_planar=True)
+    kernel = positive(kernel, "kernel")
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4)
+    k = positive(interpolation_neighbors, "interpolation_neighbors", integer=True)
+    bn = None
+    if base_normals is not None:
+        bn = as_points(base_normals, "base_normals")
+        if bn.shape != s.shape:
+            raise ValueError(f"base_normals must have the shape of base_points {s.shape}, got {bn.shape}")
+    origin = centre(np.vstack([a, b, s]))
+    _core.set_threads(int(threads))
+    r = _core.morph(a - origin, b - origin, s - origin, bn, kernel, neighbors, positive(tolerance, "tolerance"),
+                    positive(max_iterations, "max_iterations", integer=True), k, as_callback(progress))
+    return Morph(r["base"] + origin, r["normals"], r["detail_a"], r["detail_b"],
+                 {"not_converged": int(r["not_converged"]), "degenerate": int(r["degenerate"])})
+
+
+def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decimation: float = 0.25,
+                       kernel: float = 1.0, normals=None, neighbors: int = 24, tolerance: float = 1e-7,
+                       max_iterations: int = 30, max_variation: float = 0.05, diffusion_iterations: int = 10,
+                       lam: float = 0.5, taubin: bool = True, diffusion_neighbors: int = 10,
+                       fine_kernel: float = 0.5, max_distance=None, threads: int = 0,
+                       progress=None) -> Decomposition:
+    """Multiscale decomposition with bottom-up ray-shooting encoding (Sec. 6.1).
+
+    The scale space is built as in decompose() (smoother "mls": decimate and project, Sec. 7;
+    "diffusion": the decimated support is diffused first, Sec. 5.1, with diffusion_iterations,
+    lam, taubin and diffusion_neighbors). Then P^0 is kept and every finer level is where rays from
+    the level below, along its normals, meet the next finer surface. The finest level therefore
+    resamples the input's MLS surface: reconstruct() gives it back exactly, not the input points.
+    settings["rays_missed"] counts, per band, rays that found no surface (these fall back to the
+    orthogonal projection of their origin); rays_missed_points(dec) lists them.
+    fine_kernel  kernel of the input's own MLS surface, which the finest level resamples, as a
+                 multiple of the input's spacing: small, so that it stays close to the samples
+    """
+    if smoother not in ("mls", "diffusion"):
+        raise ValueError(f"smoother must be 'mls' or 'diffusion', got {smoother!r}")
+    levels = positive(levels, "levels", integer=True)
+    if levels < 2:
+        raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
+    decimation = positive(decimation, "decimation")
+    if decimation >= 1.0:
+        raise ValueError(f"decimation must be in (0, 1), got {decimation}")
+    kernel = positive(kernel, "kernel")
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4)
+    tolerance = positive(tolerance, "tolerance")
+    max_iterations = positive(max_iterations, "max_iterations", integer=True)
+    max_variation = positive(max_variation, "max_variation")
+    diffusion = None
+    if smoother == "diffusion":
+        k, lam_, mu = _diffusion_settings(lam, None, taubin, diffusion_neighbors)
+        diffusion = (k, lam_, mu, positive(diffusion_iterations, "diffusion_iterations", integer=True))
+    need = int(np.ceil(MIN_COARSE_POINTS / decimation ** (levels - 1)))
+    p = as_points(points)
+    if len(p) < need:
+        raise ValueError(f"decompose_rayshoot needs at least {need} points for levels={levels} and "
+                         f"decimation={decimation}; got {len(p)}")
+    require_surface(p)
+    n_arr = None
+    if normals is not None:
+        n_arr = as_points(normals, "normals")
+        if n_arr.shape != p.shape:
+            raise ValueError(f"normals must have the shape of points {p.shape}, got {n_arr.shape}")
+    limit = 0.0 if max_distance is None else positive(max_distance, "max_distance")
+    fine_kernel = positive(fine_kernel, "fine_kernel")
+    origin = centre(p)
+    _core.set_threads(int(threads))
+    model, missed = _core.decompose_rayshoot(p - origin, n_arr, levels, decimation, kernel, neighbors, tolerance,
+                                             max_iterations, max_variation, diffusion, limit, fine_kernel,
+                                             as_callback(progress))
+    settings = dict(levels=levels, decimation=decimation, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
+                    max_iterations=max_iterations, max_variation=max_variation, smoother=smoother,
+                    encoding="rayshoot", rays_missed=[int(len(m)) for m in missed])
+    dec = Decomposition(model, origin, settings)
+    dec._cache["rays_missed_points"] = [np.asarray(m) for m in missed]
+    return dec
+
+
+def rays_missed_points(dec: Decomposition) -> list:
+    """Per band, the indices of points whose ray missed in decompose_rayshoot (empty lists
+    for a decomposition loaded from a file, which keeps only the counts in settings)."""
+    if not isinstance(dec, Decomposition):
+        raise ValueError(f"expected a pointscale.Decomposition, got {type(dec).__name__}")
+    return list(dec._cache.get("rays_missed_points", [np.zeros(0, np.int32)] * dec.n_bands))
