@@ -31,6 +31,12 @@ def _diffusion_settings(lam, mu, taubin, neighbors):
     return neighbors, lam, mu
 
 
+def _diffusion_options(iterations, lam, taubin, neighbors) -> tuple:
+    """The core's (neighbors, lam, mu, iterations) for the "diffusion" smoother of a decomposition."""
+    k, lam, mu = _diffusion_settings(lam, None, taubin, neighbors)
+    return (k, lam, mu, positive(iterations, "diffusion_iterations", integer=True))
+
+
 def smooth_diffusion(points, iterations: int = 10, *, lam: float = 0.5, taubin: bool = False, mu=None,
                      neighbors: int = 10, threads: int = 0, progress=None) -> np.ndarray:
     """Laplacian diffusion smoothing of a point cloud (Sec. 5.1, Eq. 12): p' = p + lam * L(p).
@@ -279,8 +285,7 @@ def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decima
     max_variation = positive(max_variation, "max_variation")
     diffusion = None
     if smoother == "diffusion":
-        k, lam_, mu = _diffusion_settings(lam, None, taubin, diffusion_neighbors)
-        diffusion = (k, lam_, mu, positive(diffusion_iterations, "diffusion_iterations", integer=True))
+        diffusion = _diffusion_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
     need = int(np.ceil(MIN_COARSE_POINTS / decimation ** (levels - 1)))
     p = as_points(points)
     if len(p) < need:
