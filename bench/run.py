@@ -160,16 +160,18 @@ def worker_pointscale(args: argparse.Namespace) -> int:
     base_max = maxrss_kib()
     base_now = rss_now_kib()
 
-    dec_times = []
+    dec_times, cpu_times = [], []
     peak = None
     for _ in range(max(1, args.reps)):
         if dec_times and sum(dec_times) > args.rep_budget:
             break  # slow input: the first run(s) already say enough
         dec = None  # free the previous result before the next run
+        c0 = time.process_time()  # CPU time of the whole process, all threads
         t0 = time.perf_counter()
         dec = pointscale.decompose(points, levels=args.levels, neighbors=args.neighbors,
                                    threads=args.threads)
         dec_times.append(time.perf_counter() - t0)
+        cpu_times.append(time.process_time() - c0)
         if peak is None:
             peak = maxrss_kib()  # peak of the first (cold) run
     t_dec = statistics.median(dec_times)
@@ -183,6 +185,7 @@ def worker_pointscale(args: argparse.Namespace) -> int:
         "decompose_s": t_dec,
         "decompose_all_s": dec_times,
         "decompose_reps": len(dec_times),
+        "decompose_cpu_s": statistics.median(cpu_times),
         "maxrss_baseline_kib": base_max,
         "rss_baseline_kib": base_now,
         "maxrss_peak_kib": peak,
@@ -265,7 +268,7 @@ def fmt(x, spec, missing="n/a"):
 
 def render(rows: list[dict], args: argparse.Namespace) -> str:
     head = ("| input | points | K | pointscale decompose, 4 levels (s) | PCL MLS pass (s) "
-            "| PCL radius / mean nbrs | ratio (a)/(b) | reconstruct median / first (ms) "
+            "| PCL radius / mean nbrs | ratio (a)/(b) | CPU-time ratio | reconstruct median / first (ms) "
             "| recon max err / diag | peak mem (B/pt) | PCL peak (B/pt) |")
     sep = "|" + "|".join(["---"] * (head.count("|") - 1)) + "|"
     out = [head, sep]
@@ -277,6 +280,10 @@ def render(rows: list[dict], args: argparse.Namespace) -> str:
         a_cell = fmt(a, ".3f", "FAILED" if r.get("ps_err") else "n/a")
         b_cell = fmt(b, ".3f", "FAILED" if r.get("pcl_err") else "n/a")
         ratio_cell = fmt(ratio, ".2f")
+        cpu_ratio_cell = "n/a"
+        if ps.get("decompose_cpu_s") is not None and pc.get("process_cpu_s"):
+            cpu_ratio_cell = (f"{ps['decompose_cpu_s'] / pc['process_cpu_s']:.2f} "
+                              f"({ps['decompose_cpu_s']:.2f} / {pc['process_cpu_s']:.2f} s)")
         if ps and ps.get("decompose_reps", 1) < args.reps:
             a_cell += f" ({ps['decompose_reps']} run{'s' if ps['decompose_reps'] > 1 else ''})"
         if r.get("ps_timeout"):
@@ -293,7 +300,7 @@ def render(rows: list[dict], args: argparse.Namespace) -> str:
             pcl_mem = (pc["maxrss_after_kib"] - pc["maxrss_before_kib"]) * 1024.0 / pc["n"]
         out.append(
             f"| {r['name']} | {r['n']:,} | {args.neighbors} | "
-            f"{a_cell} | {b_cell} | {rad} | {ratio_cell} | {recon} | "
+            f"{a_cell} | {b_cell} | {rad} | {ratio_cell} | {cpu_ratio_cell} | {recon} | "
             f"{fmt(ps.get('reconstruct_max_err_rel'), '.1e')} | "
             f"{fmt(ps.get('peak_bytes_per_point'), '.0f')} | {fmt(pcl_mem, '.0f')} |")
     return "\n".join(out)
@@ -383,8 +390,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--reps", type=int, default=None,
                    help="decompose and PCL passes per cloud, median reported (default 3; "
                         "1 with --quick and for >= 10M points)")
-    p.add_argument("--timeout", type=float, default=900.0,
-                   help="per-subprocess timeout in s (default 900); a timed-out cell reads '> T'")
+    p.add_argument("--timeout", type=float, default=600.0,
+                   help="per-subprocess timeout in s (default 600); a timed-out cell reads '> T'")
     p.add_argument("--rep-budget", type=float, default=60.0,
                    help="stop repeating a decompose once its runs took this many s (default 60)")
     p.add_argument("--json", type=Path, help="also write all raw results to this file")
@@ -511,7 +518,8 @@ def main(argv: list[str] | None = None) -> int:
           % (args.levels, args.neighbors, args.threads, args.reps, args.rep_budget))
     print("(b) pcl::MovingLeastSquares<PointXYZ, PointNormal>, order 1, radius calibrated to a mean of "
           "K neighbours, %d threads, process() only, median of %d;" % (args.threads, args.reps))
-    print("reconstruct = pointscale.reconstruct(dec, base=dec.base); peak mem = ru_maxrss delta "
+    print("CPU-time ratio: user+system CPU seconds of (a) over (b), all threads; less sensitive to other load than wall time.\n"
+          "reconstruct = pointscale.reconstruct(dec, base=dec.base); peak mem = ru_maxrss delta "
           "over the post-load baseline, fresh subprocess per cloud.")
     if not have_ps:
         print("pointscale:", ps_why)
