@@ -321,3 +321,33 @@ def test_project_sheets_bad_input():
         ps.project_sheets(p, p, onto_normals=p[:10])
     with pytest.raises(ValueError, match="zero vectors"):
         ps.project_sheets(p, p, onto_normals=np.zeros_like(p))
+
+
+# ----------------------------------------------------------------------------------------------
+# decompose(smoother=..., encoding=...): run once the lead's hook in multiscale.decompose is in.
+
+needs_hook = pytest.mark.skipif("smoother" not in __import__("inspect").signature(ps.decompose).parameters,
+                                reason="decompose() has no smoother/encoding options yet (hook in multiscale.py)")
+
+
+@needs_hook
+def test_decompose_diffusion_smoother_round_trip_and_smoother_levels():
+    p = ps.shapes.bumpy_sphere(20000, fine_frequency=40.0)
+    dec = ps.decompose(p, 4, smoother="diffusion")
+    assert dec.settings["smoother"] == "diffusion"
+    np.testing.assert_allclose(ps.reconstruct(dec), p, atol=1e-9)
+    fine = [abs(radial_amplitudes(dec.level(l), [3.0, 40.0])[1]) for l in range(dec.n_levels)]
+    assert all(a < b for a, b in zip(fine, fine[1:])), f"fine amplitude per level {fine}"
+    plain = ps.decompose(p, 4)
+    assert radial_amplitudes(dec.level(0), [3.0, 40.0])[0] < radial_amplitudes(plain.level(0), [3.0, 40.0])[0]
+
+
+@needs_hook
+def test_decompose_rayshoot_encoding_and_bad_options():
+    p = ps.shapes.bumpy_sphere(20000)
+    dec = ps.decompose(p, 4, encoding="rayshoot", smoother="diffusion")
+    assert dec.settings["encoding"] == "rayshoot" and len(dec.settings["rays_missed"]) == 3
+    with pytest.raises(ValueError, match="smoother"):
+        ps.decompose(p, smoother="gauss")
+    with pytest.raises(ValueError, match="encoding"):
+        ps.decompose(p, encoding="orthogonal")
