@@ -43,6 +43,12 @@ def decompose_function(ps, smoother="MLS", encoding="PROJECTION"):
     ``ps.decompose_rayshoot``, which also offers the diffusion smoother (Sec. 5.1).
     """
     smoother_arg = {"MLS": "mls", "DIFFUSION": "diffusion"}[smoother]
+    params = inspect.signature(ps.decompose).parameters
+    if encoding == "RAY" and "encoding" in params:
+        extra = {"encoding": "rayshoot"}
+        if smoother != "MLS":
+            extra["smoother"] = smoother_arg
+        return ps.decompose, extra
     if encoding == "RAY":
         fn = getattr(ps, "decompose_rayshoot", None)
         if fn is None:
@@ -50,7 +56,7 @@ def decompose_function(ps, smoother="MLS", encoding="PROJECTION"):
         return fn, {"smoother": smoother_arg}
     if smoother == "MLS":
         return ps.decompose, {}
-    if "smoother" in inspect.signature(ps.decompose).parameters:
+    if "smoother" in params:
         return ps.decompose, {"smoother": smoother_arg}
     raise ValueError("the Diffusion smoother needs the Ray Shooting encoding in this pointscale engine")
 
