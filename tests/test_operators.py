@@ -191,7 +191,7 @@ def test_encode_gain_zero_lands_on_the_base_and_gain_one_returns_the_model():
     lo, hi = model.min(axis=0), model.max(axis=0)
     dec = ps.encode(model, base)
     assert dec.n_bands == 1 and dec.n_points == len(model)
-    assert dec.stats[0]["degenerate"] == 0
+    assert dec.stats[0]["degenerate"] == 0 and dec.stats[0]["pinned"] == 0
     on_base = ps.reconstruct(dec, [0.0])
     assert ellipsoid_distance(on_base, 0.5 * (lo + hi), 0.5 * (hi - lo)).max() < 1e-3 * diag(base)
     np.testing.assert_allclose(ps.reconstruct(dec, [1.0]), model, atol=1e-6 * diag(model))
@@ -208,7 +208,7 @@ def test_encode_works_far_outside_the_base_kernels():
     dec = ps.encode(model, base)
     h = dec.stats[0]["kernel_width"]
     assert np.min(np.abs(dec.details)) > 30 * h
-    assert dec.stats[0]["degenerate"] == 0
+    assert dec.stats[0]["degenerate"] == 0 and dec.stats[0]["pinned"] == 0
     on_base = ps.reconstruct(dec, [0.0])
     assert np.abs(np.linalg.norm(on_base, axis=1) - 1.0).max() < 1e-3 * diag(base)
     np.testing.assert_allclose(ps.reconstruct(dec, [1.0]), model, atol=1e-6 * diag(model))

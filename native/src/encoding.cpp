@@ -116,10 +116,16 @@ Points nearest_normals(const Points& query, const SpatialIndex& base, const Poin
   return out;
 }
 
-std::pair<double, int> align_offsets(const Points& fine, Points& level, const LevelSupport& support,
-                                     const Points& reference, int max_iterations, double stop,
-                                     const ProgressStage& stage) {
+Alignment align_offsets(const Points& fine, Points& level, const LevelSupport& support, const Points& reference,
+                        int max_iterations, double stop, const ProgressStage& stage) {
+  const Points start = level;
+  // How far a point may slide: its cluster's kernel width, or a twentieth of its offset (a 3 degree
+  // turn of its normal line), whichever is more. The level leaves the base by move^2 curvature / 2.
+  auto reach = [&](Eigen::Index i, Index c) {
+    return std::max(support.h(c), 0.05 * (fine.row(i) - start.row(i)).norm());
+  };
   const Index c_count = support.clusters;
+  std::vector<unsigned char> kept(static_cast<std::size_t>(c_count), 0);
   std::vector<Index> own(static_cast<std::size_t>(c_count));
   Points anchor_reference(c_count, 3);
   for (Index c = 0; c < c_count; ++c) { own[c] = c; anchor_reference.row(c) = reference.row(support.anchors[c]); }
@@ -153,6 +159,7 @@ std::pair<double, int> align_offsets(const Points& fine, Points& level, const Le
     const Points normals = support_normals(anchors, own.data(), anchors, support, anchor_reference);
     parallel_for(static_cast<std::size_t>(c_count), [&](std::size_t b, std::size_t e) {
       for (std::size_t c = b; c < e; ++c) {
+        if (kept[c]) { moves[c] = 0.0; continue; }
         const Index i = support.anchors[c];
         const Vec3 nrm = normals.row(static_cast<Eigen::Index>(c)).transpose();
         const Vec3 f = fine.row(i).transpose();
@@ -166,24 +173,41 @@ std::pair<double, int> align_offsets(const Points& fine, Points& level, const Le
         else if (full < moves[c]) damping[c] = std::min(newton[c], damping[c] * 1.25);
         moves[c] = full;
         level.row(i) = (p + damping[c] * move).transpose();
+        if ((level.row(i) - start.row(i)).norm() > reach(i, support.labels[i])) {
+          level.row(i) = start.row(i);
+          kept[c] = 1;
+          moves[c] = 0.0;
+        }
       }
     });
     largest = *std::max_element(moves.begin(), moves.end());
   }
+  Alignment out;
+  out.iterations = it;
   const Points normals = level_normals(level, support, reference);
   std::vector<unsigned char> is_anchor(static_cast<std::size_t>(level.rows()), 0);
   for (Index a : support.anchors) is_anchor[a] = 1;
+  std::vector<unsigned char> stays(static_cast<std::size_t>(level.rows()), 0);
+  std::vector<double> left(static_cast<std::size_t>(level.rows()), 0.0);
   parallel_for(static_cast<std::size_t>(level.rows()), [&](std::size_t b, std::size_t e) {
     for (std::size_t ii = b; ii < e; ++ii) {
-      if (is_anchor[ii]) continue;
       const Eigen::Index i = static_cast<Eigen::Index>(ii);
       const Vec3 nrm = normals.row(i).transpose();
       const Vec3 f = fine.row(i).transpose();
-      level.row(i) = (f - (f - level.row(i).transpose()).dot(nrm) * nrm).transpose();
+      if (!is_anchor[ii]) {
+        const Vec3 target = f - (f - level.row(i).transpose()).dot(nrm) * nrm;
+        if ((target - start.row(i).transpose()).norm() <= reach(i, support.labels[ii])) level.row(i) = target.transpose();
+        else stays[ii] = 1;
+      }
+      const Vec3 d = f - level.row(i).transpose();
+      left[ii] = (d - d.dot(nrm) * nrm).norm();
     }
   });
+  for (Index c = 0; c < c_count; ++c) out.kept += kept[c];
+  for (unsigned char s : stays) out.kept += s;
+  out.residual = *std::max_element(left.begin(), left.end());
   stage.report(1.0);
-  return {largest, it};
+  return out;
 }
 
 MultiscaleModel encode_onto(const Points& points, const Points& base, const Points* base_normals,
@@ -206,8 +230,8 @@ MultiscaleModel encode_onto(const Points& points, const Points& base, const Poin
   // Orientation from the base: its given normals, else outward by propagation over the base.
   const Points reference = nearest_normals(level, base_index, base_normals ? *base_normals : oriented_normals(base_index));
 
-  const auto [residual, iterations] = align_offsets(points, level, support, reference, options.consistency_iterations,
-                                                    1e-12 * scale, all.sub(0.6, 0.95));
+  const Alignment aligned = align_offsets(points, level, support, reference, options.consistency_iterations,
+                                         1e-12 * scale, all.sub(0.6, 0.95));
   const Points normals = level_normals(level, support, reference);
   model.details.resize(1, n);
   for (Eigen::Index i = 0; i < n; ++i) model.details(0, i) = (points.row(i) - level.row(i)).dot(normals.row(i));
@@ -218,8 +242,9 @@ MultiscaleModel encode_onto(const Points& points, const Points& base, const Poin
   report.kernel_width = h.size() ? h.mean() : 0.0;
   report.not_converged = projected.not_converged;
   report.degenerate = projected.degenerate;
-  report.consistency_iterations = iterations;
-  report.consistency_residual = residual;
+  report.consistency_iterations = aligned.iterations;
+  report.consistency_residual = aligned.residual;
+  report.pinned = aligned.kept;
   model.reports.push_back(report);
   all.report(1.0);
   return model;

@@ -17,7 +17,8 @@ struct EncodeOptions {
 //         weights are scaled before exponentiation and neighbourhoods are k-nearest, never empty
 // base_normals  #B by 3 or nullptr: orients the base (else outward by propagation)
 // Returns a one-band MultiscaleModel: P^0 on the base's MLS surface, D^0 the normal offsets,
-// made consistent with the normals that reconstruction recomputes (reports[0] says how well).
+// made consistent with the normals that reconstruction recomputes. reports[0].pinned counts the
+// points left inconsistent (see align_offsets), consistency_residual their largest error.
 MultiscaleModel encode_onto(const Points& points, const Points& base, const Points* base_normals,
                             const EncodeOptions& options, const ProgressCallback* progress = nullptr);
 
@@ -29,13 +30,20 @@ MultiscaleModel encode_onto(const Points& points, const Points& base, const Poin
 MlsResult project_from_afar(const Points& x, const SpatialIndex& base, const Eigen::VectorXd& h,
                             const MlsOptions& options, const ProgressStage& stage = {});
 
+struct Alignment {
+  int iterations = 0;
+  std::size_t kept = 0;    // points left where they were: no consistent position within reach
+  double residual = 0.0;   // largest tangential part of fine - level left, in coordinates
+};
+
 // Makes fine - level lie along the level's recomputed normals, moving each level point within
 // its tangent plane (anchors by damped iteration, then every other point in one step, since its
-// normal does not depend on it). reference #P by 3 orients the normals. Returns the largest
-// anchor move left and the iterations used.
-std::pair<double, int> align_offsets(const Points& fine, Points& level, const LevelSupport& support,
-                                     const Points& reference, int max_iterations, double stop,
-                                     const ProgressStage& stage = {});
+// normal does not depend on it). A point whose consistent position lies farther than its
+// cluster's kernel width and a twentieth of its offset stays where it was: near a model's
+// parts beyond the base's centres of curvature the condition has no stable solution, and moving
+// such points would drag the level off the base. reference #P by 3 orients the normals.
+Alignment align_offsets(const Points& fine, Points& level, const LevelSupport& support, const Points& reference,
+                        int max_iterations, double stop, const ProgressStage& stage = {});
 
 // The support of a level (clusters, anchors, neighbourhoods, kernels, frames) from its points:
 // clusters of `level` down to `target`, kernels = kernel x spacing of the anchors.

@@ -161,8 +161,11 @@ def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neigh
     base_normals (m, 3) optional, orients the base (else outward by propagation)
     kernel       kernel width as a multiple of the base's local sample spacing
     reconstruct(dec, [0]) lies on the base's MLS surface, reconstruct(dec, [1]) is the model,
-    other gains blend or exaggerate (Fig. 8). stats[0]["consistency_residual"] tells how exactly
-    the offsets follow the recomputed normals.
+    other gains blend or exaggerate (Fig. 8). Where the model reaches beyond the base's centres of
+    curvature, or its projections crowd into strips, a point may have no position on the base
+    whose recomputed normal passes through it; it then stays at its projection, and gain 1 misses
+    it by its tangential offset. stats[0]["pinned"] counts such points and
+    stats[0]["consistency_residual"] is the largest such error (0 up to rounding when none).
     """
     p = as_points(points, min_count=MIN_COARSE_POINTS)
     b = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)
