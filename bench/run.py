@@ -13,8 +13,9 @@ For every input cloud the same float32-exact points are fed to both sides:
   (c) ratio (a)/(b)                                  target < 1.0 (at 1M),
   (d) pointscale.reconstruct(dec, base=dec.base), median of several runs
                                                       target < 20 ms at 100k x 4 levels,
-  (e) peak memory per point while decomposing: ru_maxrss delta over the baseline
-      taken after the data is loaded, in a fresh subprocess per cloud
+  (e) peak memory per point while decomposing: peak RSS (VmHWM, reset after the data
+      is loaded) minus the RSS after loading, in a fresh subprocess per cloud (not
+      ru_maxrss: a child inherits its parent's peak through fork/exec)
                                                       target < 300 bytes/point.
 Timed code never runs in a test; this script only prints.
 
@@ -124,9 +125,24 @@ def read_ply_xyz(path: Path) -> np.ndarray:
 
 # --------------------------------------------------------------------------- workers
 
-def rss_now_kib() -> int:
-    with open("/proc/self/statm") as f:
-        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") // 1024
+def vm_status_kib() -> dict:
+    """VmRSS and VmHWM (peak RSS of this process image) from /proc/self/status, in KiB."""
+    out = {}
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith(("VmRSS:", "VmHWM:")):
+                out[line.split(":")[0]] = int(line.split()[1])
+    return out
+
+
+def reset_peak_rss() -> bool:
+    """Resets VmHWM to the current RSS (Linux >= 4.0); False when not allowed."""
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+        return True
+    except OSError:
+        return False
 
 
 def maxrss_kib() -> int:
@@ -157,8 +173,13 @@ def worker_pointscale(args: argparse.Namespace) -> int:
 
     points = np.load(args.worker_pointscale)  # float64 (n, 3), exactly the array size
     n = len(points)
+    # Peak memory: NOT ru_maxrss, which a child inherits from its parent's peak across
+    # fork/exec on Linux (a parent that once held 10M points makes every child's
+    # ru_maxrss start at that size). VmHWM belongs to this process image; reset it to
+    # the current RSS after loading, then read it after the first decompose.
+    was_reset = reset_peak_rss()
+    base = vm_status_kib()
     base_max = maxrss_kib()
-    base_now = rss_now_kib()
 
     dec_times, cpu_times = [], []
     peak = None
@@ -173,7 +194,8 @@ def worker_pointscale(args: argparse.Namespace) -> int:
         dec_times.append(time.perf_counter() - t0)
         cpu_times.append(time.process_time() - c0)
         if peak is None:
-            peak = maxrss_kib()  # peak of the first (cold) run
+            peak = vm_status_kib()["VmHWM"]  # peak of the first (cold) run
+            peak_maxrss = maxrss_kib()
     t_dec = statistics.median(dec_times)
 
     res = {
@@ -186,11 +208,14 @@ def worker_pointscale(args: argparse.Namespace) -> int:
         "decompose_all_s": dec_times,
         "decompose_reps": len(dec_times),
         "decompose_cpu_s": statistics.median(cpu_times),
-        "maxrss_baseline_kib": base_max,
-        "rss_baseline_kib": base_now,
-        "maxrss_peak_kib": peak,
-        "peak_bytes_per_point": (peak - base_max) * 1024.0 / n,
+        "peak_reset": was_reset,
+        "rss_baseline_kib": base["VmRSS"],
+        "hwm_baseline_kib": base["VmHWM"],
+        "hwm_peak_kib": peak,
+        "peak_bytes_per_point": (peak - (base["VmRSS"] if was_reset else base["VmHWM"])) * 1024.0 / n,
         "abs_peak_bytes_per_point": peak * 1024.0 / n,
+        "ru_maxrss_baseline_kib": base_max,
+        "ru_maxrss_peak_kib": peak_maxrss,
         "details_shape": list(np.shape(dec.details)),
         "stats": jsonable(getattr(dec, "stats", {})),
     }
@@ -297,7 +322,7 @@ def render(rows: list[dict], args: argparse.Namespace) -> str:
                  f"{ps['reconstruct_median_ms']:.1f} / {ps['reconstruct_first_ms']:.1f}")
         pcl_mem = None
         if pc:
-            pcl_mem = (pc["maxrss_after_kib"] - pc["maxrss_before_kib"]) * 1024.0 / pc["n"]
+            pcl_mem = (pc["hwm_after_kib"] - pc["rss_before_kib"]) * 1024.0 / pc["n"]
         out.append(
             f"| {r['name']} | {r['n']:,} | {args.neighbors} | "
             f"{a_cell} | {b_cell} | {rad} | {ratio_cell} | {cpu_ratio_cell} | {recon} | "
@@ -519,8 +544,8 @@ def main(argv: list[str] | None = None) -> int:
     print("(b) pcl::MovingLeastSquares<PointXYZ, PointNormal>, order 1, radius calibrated to a mean of "
           "K neighbours, %d threads, process() only, median of %d;" % (args.threads, args.reps))
     print("CPU-time ratio: user+system CPU seconds of (a) over (b), all threads; less sensitive to other load than wall time.\n"
-          "reconstruct = pointscale.reconstruct(dec, base=dec.base); peak mem = ru_maxrss delta "
-          "over the post-load baseline, fresh subprocess per cloud.")
+          "reconstruct = pointscale.reconstruct(dec, base=dec.base); peak mem = VmHWM (peak RSS) "
+          "minus RSS after loading, fresh subprocess per cloud.")
     if not have_ps:
         print("pointscale:", ps_why)
     if peer is None:

@@ -49,6 +49,26 @@ double cpu_seconds() {  // user + system time of the whole process, all threads
   return ru.ru_utime.tv_sec + ru.ru_stime.tv_sec + 1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
 }
 
+// VmRSS / VmHWM of this process image in KiB (-1 if unavailable). Not ru_maxrss: on
+// Linux a child inherits its parent's peak RSS through fork/exec, so a Python parent
+// that once held a big cloud would inflate it.
+long status_kib(const char* key) {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  const std::size_t len = std::strlen(key);
+  while (std::getline(f, line))
+    if (line.compare(0, len, key) == 0) return std::atol(line.c_str() + len + 1);
+  return -1;
+}
+
+bool reset_peak_rss() {  // VmHWM := VmRSS (Linux >= 4.0)
+  std::ofstream f("/proc/self/clear_refs");
+  if (!f) return false;
+  f << "5";
+  f.flush();
+  return static_cast<bool>(f);
+}
+
 long maxrss_kib() {
   struct rusage ru;
   getrusage(RUSAGE_SELF, &ru);
@@ -217,6 +237,7 @@ int main(int argc, char** argv) {
   pcl::PointIndicesPtr corr;
   std::vector<double> times, cpu_times;
   long rss_before_kib = 0, rss_after_kib = 0;
+  bool peak_reset = false;
   for (int r = 0; r < reps; ++r) {
     pcl::MovingLeastSquares<pcl::PointXYZ, pcl::PointNormal> mls;
     pcl::search::KdTree<pcl::PointXYZ>::Ptr search(new pcl::search::KdTree<pcl::PointXYZ>);
@@ -228,13 +249,16 @@ int main(int argc, char** argv) {
     mls.setNumberOfThreads(threads);
     mls.setUpsamplingMethod(pcl::MovingLeastSquares<pcl::PointXYZ, pcl::PointNormal>::NONE);
     out.clear();
-    if (r == 0) rss_before_kib = maxrss_kib();
+    if (r == 0) {
+      peak_reset = reset_peak_rss();
+      rss_before_kib = peak_reset ? status_kib("VmRSS") : status_kib("VmHWM");
+    }
     t0 = Clock::now();
     const double c0 = cpu_seconds();
     mls.process(out);
     times.push_back(seconds_since(t0));
     cpu_times.push_back(cpu_seconds() - c0);
-    if (r == 0) rss_after_kib = maxrss_kib();
+    if (r == 0) rss_after_kib = status_kib("VmHWM");
     corr = mls.getCorrespondingIndices();
   }
   std::vector<double> sorted_times = times;
@@ -292,9 +316,11 @@ int main(int argc, char** argv) {
       "\"mean_neighbors\": %.3f, \"median_neighbors\": %d, \"calib_samples\": %zu, "
       "\"calib_iters\": %d, \"polynomial_order\": 1, \"threads\": %d, "
       "\"load_s\": %.4f, \"calib_s\": %.4f, \"process_s\": %.4f, \"process_all_s\": %s, \"process_cpu_s\": %.4f, \"n_out\": %zu, "
-      "\"mean_disp_rel\": %.3g, \"maxrss_before_kib\": %ld, \"maxrss_after_kib\": %ld}\n",
+      "\"mean_disp_rel\": %.3g, \"peak_reset\": %s, \"rss_before_kib\": %ld, \"hwm_after_kib\": %ld, "
+      "\"ru_maxrss_kib\": %ld}\n",
       PCL_VERSION_PRETTY, n, k, radius, calibrated ? "true" : "false", achieved, median_count,
       sample.size(), calib_iters, threads, load_s, calib_s, process_s, all_times.c_str(), process_cpu_s, out.size(),
-      finite ? disp / finite / diag : -1.0, rss_before_kib, rss_after_kib);
+      finite ? disp / finite / diag : -1.0, peak_reset ? "true" : "false", rss_before_kib,
+      rss_after_kib, maxrss_kib());
   return 0;
 }
