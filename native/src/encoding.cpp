@@ -116,8 +116,36 @@ Points nearest_normals(const Points& query, const SpatialIndex& base, const Poin
   return out;
 }
 
+namespace {
+
+// Moves p along the unit direction d onto the MLS surface: two ray-plane steps (Adamson and
+// Alexa 2003), enough for a point that slid a little off it within its tangent plane.
+Vec3 along_onto(const Vec3& p, const Vec3& d, const SpatialIndex& surface, const Eigen::VectorXd& h, int k) {
+  k = std::min<int>(k, surface.size());
+  Index idx[64];
+  double d2[64], ih2[64], w[64];
+  k = std::min(k, 64);
+  Vec3 x = p;
+  for (int it = 0; it < 2; ++it) {
+    const int found = surface.knn(x.data(), k, idx, d2);
+    for (int j = 0; j < found; ++j) ih2[j] = 1.0 / (h(idx[j]) * h(idx[j]));
+    gaussian_weights(d2, ih2, found, w);
+    const PlaneFit fit = fit_weighted_plane(surface.points(), idx, w, found, x);
+    const double cosine = fit.ok ? fit.normal.dot(d) : 0.0;
+    if (std::abs(cosine) < 0.5) return x;  // the surface turns away here: stay
+    x += ((fit.mean - x).dot(fit.normal) / cosine) * d;
+  }
+  return x;
+}
+
+}  // namespace
+
 Alignment align_offsets(const Points& fine, Points& level, const LevelSupport& support, const Points& reference,
-                        int max_iterations, double stop, const ProgressStage& stage) {
+                        int max_iterations, double stop, const ProgressStage& stage, const SpatialIndex* surface,
+                        const Eigen::VectorXd* surface_h, int surface_neighbors) {
+  auto settle = [&](const Vec3& p, const Vec3& n) {
+    return surface ? along_onto(p, n, *surface, *surface_h, surface_neighbors) : p;
+  };
   const Points start = level;
   // How far a point may slide: its cluster's kernel width, or a twentieth of its offset (a 3 degree
   // turn of its normal line), whichever is more. The level leaves the base by move^2 curvature / 2.
@@ -172,7 +200,9 @@ Alignment align_offsets(const Points& fine, Points& level, const LevelSupport& s
         if (full > 1.1 * moves[c]) damping[c] = std::max(damping[c] * 0.5, 1.0 / 1024.0);
         else if (full < moves[c]) damping[c] = std::min(newton[c], damping[c] * 1.25);
         moves[c] = full;
-        level.row(i) = (p + damping[c] * move).transpose();
+        // A slide m leaves the surface by about m^2 curvature / 2: only larger ones need the step back.
+        const Vec3 slid = p + damping[c] * move;
+        level.row(i) = (damping[c] * full > 1e-3 * support.h(static_cast<Eigen::Index>(c)) ? settle(slid, nrm) : slid).transpose();
         if ((level.row(i) - start.row(i)).norm() > reach(i, support.labels[i])) {
           level.row(i) = start.row(i);
           kept[c] = 1;
@@ -196,7 +226,8 @@ Alignment align_offsets(const Points& fine, Points& level, const LevelSupport& s
       const Vec3 f = fine.row(i).transpose();
       if (!is_anchor[ii]) {
         const Vec3 target = f - (f - level.row(i).transpose()).dot(nrm) * nrm;
-        if ((target - start.row(i).transpose()).norm() <= reach(i, support.labels[ii])) level.row(i) = target.transpose();
+        if ((target - start.row(i).transpose()).norm() <= reach(i, support.labels[ii]))
+          level.row(i) = settle(target, nrm).transpose();
         else stays[ii] = 1;
       }
       const Vec3 d = f - level.row(i).transpose();
@@ -231,7 +262,7 @@ MultiscaleModel encode_onto(const Points& points, const Points& base, const Poin
   const Points reference = nearest_normals(level, base_index, base_normals ? *base_normals : oriented_normals(base_index));
 
   const Alignment aligned = align_offsets(points, level, support, reference, options.consistency_iterations,
-                                         1e-12 * scale, all.sub(0.6, 0.95));
+                                         1e-12 * scale, all.sub(0.6, 0.95), &base_index, &h, options.mls.neighbors);
   const Points normals = level_normals(level, support, reference);
   model.details.resize(1, n);
   for (Eigen::Index i = 0; i < n; ++i) model.details(0, i) = (points.row(i) - level.row(i)).dot(normals.row(i));

@@ -42,8 +42,12 @@ struct Alignment {
 // cluster's kernel width and a twentieth of its offset stays where it was: near a model's
 // parts beyond the base's centres of curvature the condition has no stable solution, and moving
 // such points would drag the level off the base. reference #P by 3 orients the normals.
+// surface, surface_h: when given, every slide is followed by a step along the point's normal back
+// onto this MLS surface (which keeps fine - level along the normal), so the level stays on it.
 Alignment align_offsets(const Points& fine, Points& level, const LevelSupport& support, const Points& reference,
-                        int max_iterations, double stop, const ProgressStage& stage = {});
+                        int max_iterations, double stop, const ProgressStage& stage = {},
+                        const SpatialIndex* surface = nullptr, const Eigen::VectorXd* surface_h = nullptr,
+                        int surface_neighbors = 24);
 
 // The support of a level (clusters, anchors, neighbourhoods, kernels, frames) from its points:
 // clusters of `level` down to `target`, kernels = kernel x spacing of the anchors.
