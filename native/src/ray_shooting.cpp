@@ -3,8 +3,11 @@
 #include <cmath>
 #include <limits>
 
+#include "pointscale/cluster_decimation.h"
+#include "pointscale/encoding.h"
 #include "pointscale/parallel.h"
 #include "pointscale/plane_fit.h"
+#include "pointscale/sample_spacing.h"
 
 namespace pointscale {
 
@@ -58,16 +61,6 @@ RayHits shoot_rays(const Points& origins, const Points& directions, const Spatia
   for (unsigned char m : out.missed) out.miss_count += m;
   return out;
 }
-
-}  // namespace pointscale
-
-#include <cmath>
-
-#include "pointscale/cluster_decimation.h"
-#include "pointscale/encoding.h"
-#include "pointscale/sample_spacing.h"
-
-namespace pointscale {
 
 Points smoothed_support(const Points& fine, std::size_t target, double max_variation,
                         const DiffusionOptions* diffusion) {
@@ -129,8 +122,7 @@ MultiscaleModel decompose_rayshoot(const Points& points, const Points* input_nor
     if (l == 0) reference = input_normals ? *input_normals : orientation_reference(level, support);
     Points normals = level_normals(level, support, reference);
     const SpatialIndex target_index(surface[l + 1]);
-    RayOptions ray_options = rays;
-    RayHits hits = shoot_rays(level, normals, target_index, kernel[l + 1], ray_options, stage.sub(0.2, 0.9));
+    RayHits hits = shoot_rays(level, normals, target_index, kernel[l + 1], rays, stage.sub(0.2, 0.9));
     if (hits.miss_count > 0) {
       // Fall back to the orthogonal projection, measured along the normal.
       IndexList missed;

@@ -4,6 +4,8 @@
 #pragma once
 #include <vector>
 
+#include "pointscale/decomposition.h"
+#include "pointscale/diffusion.h"
 #include "pointscale/progress.h"
 #include "pointscale/spatial_index.h"
 
@@ -30,13 +32,6 @@ struct RayHits {
 // h           #S kernel widths
 RayHits shoot_rays(const Points& origins, const Points& directions, const SpatialIndex& support,
                    const Eigen::VectorXd& h, const RayOptions& options, const ProgressStage& stage = {});
-
-}  // namespace pointscale
-
-#include "pointscale/decomposition.h"
-#include "pointscale/diffusion.h"
-
-namespace pointscale {
 
 struct RayshootReport {
   std::vector<std::size_t> missed;       // k, level 0 first: rays of band l that found no surface
