@@ -50,6 +50,59 @@ RayHits shoot_rays(const Points& origins, const Points& directions, const Spatia
         if (!(std::abs(t) <= limit)) break;
         if (step <= options.tolerance * h(idx[0])) { hit = true; break; }
       }
+      if (!hit) {
+        // Bracketing fallback: the signed distance to the local plane, normal turned along the
+        // ray, changes sign where the ray crosses the surface. Search outward from the origin in
+        // half-kernel steps, then bisect.
+        const Index* nearest = idx.data();
+        support.knn(o.data(), 1, idx.data(), d2.data());
+        const double h0 = h(nearest[0]);
+        const double range = std::min(limit, 16.0 * h0), dt = 0.5 * h0;
+        auto signed_distance = [&](double tt, bool& ok) {
+          const Vec3 x = o + tt * d;
+          const int found = support.knn(x.data(), k, idx.data(), d2.data());
+          for (int j = 0; j < found; ++j) ih2[j] = inv_h2(idx[j]);
+          gaussian_weights(d2.data(), ih2.data(), found, w.data());
+          const PlaneFit fit = fit_weighted_plane(s, idx.data(), w.data(), found, x);
+          ok = fit.ok && std::abs(fit.normal.dot(d)) >= options.min_cosine;
+          return ok ? (x - fit.mean).dot(fit.normal.dot(d) > 0 ? fit.normal : Vec3(-fit.normal)) : 0.0;
+        };
+        bool ok0;
+        const double f0 = signed_distance(0.0, ok0);
+        double side_t[2] = {0.0, 0.0}, side_f[2] = {f0, f0};
+        bool side_ok[2] = {ok0, ok0};
+        for (double step = dt; step <= range && !hit; step += dt) {
+          for (int side = 0; side < 2 && !hit; ++side) {
+            const double tt = side ? -step : step;
+            bool ok;
+            const double f = signed_distance(tt, ok);
+            if (ok && side_ok[side] && (f > 0) != (side_f[side] > 0)) {
+              double lo = side_t[side], hi = tt, flo = side_f[side];
+              for (int b = 0; b < 60; ++b) {
+                const double mid = 0.5 * (lo + hi);
+                bool okm;
+                const double fm = signed_distance(mid, okm);
+                if (!okm) break;
+                if ((fm > 0) == (flo > 0)) { lo = mid; flo = fm; } else { hi = mid; }
+              }
+              bool okt;
+              const double ft = signed_distance(0.5 * (lo + hi), okt);
+              // A sign change across a fold of the fitted normal is no crossing: check |f|.
+              if (okt && std::abs(ft) <= 1e-3 * h0) { t = 0.5 * (lo + hi); hit = true; }
+            }
+            side_t[side] = tt;
+            side_f[side] = f;
+            side_ok[side] = ok;
+          }
+        }
+      }
+      if (hit) {
+        // The MLS zero set runs on past the samples (over holes and boundaries): a hit farther
+        // than 3 kernel widths from every sample is no hit.
+        const Vec3 x = o + t * d;
+        support.knn(x.data(), 1, idx.data(), d2.data());
+        if (d2[0] > 9.0 * h(idx[0]) * h(idx[0])) hit = false;
+      }
       if (hit) {
         out.positions.row(i) = (o + t * d).transpose();
         out.distances(i) = t;

@@ -1,6 +1,9 @@
 // Ray-MLS surface intersection (Adamson and Alexa 2003), for bottom-up encoding (Sec. 6.1):
 // a point on the ray is repeatedly moved to where the ray meets the weighted least-squares plane
-// fitted around it, until it lies both on the ray and on the surface.
+// fitted around it, until it lies both on the ray and on the surface. Where that iteration fails
+// (grazing rays, folds), the crossing nearest the origin within 16 kernel widths is bracketed
+// and bisected instead. A hit more than 3 kernel widths from every sample (the zero set runs on
+// over holes and past boundaries) counts as a miss.
 #pragma once
 #include <vector>
 
