@@ -8,7 +8,6 @@
 #include "pointscale/diffusion.h"
 #include "pointscale/encoding.h"
 #include "pointscale/morph.h"
-#include "pointscale/normal_estimation.h"
 #include "pointscale/ray_shooting.h"
 #include "pointscale/sample_spacing.h"
 
@@ -107,11 +106,11 @@ void bind_operators(py::module_& m) {
     MlsOptions o = mls_options(neighbors, tolerance, max_iterations);
     o.sheet = sheet;
     PythonProgress pp(progress);
+    if (given.present) o.support_normals = &given.p;
+    else o.thin_sheets = true;
     MlsResult r = without_gil([&] {
       const SpatialIndex index(s);
       const Eigen::VectorXd h = kernel * local_spacing(index, 6);
-      const Points normals = given.present ? given.p : pca_normals(index, std::min<int>(16, index.size()));
-      o.support_normals = &normals;
       return mls_project(x, index, h, o, ProgressStage{pp.get(), 0.0, 1.0});
     });
     return py::make_tuple(r.positions, r.normals, r.not_converged, r.degenerate);

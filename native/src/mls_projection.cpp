@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
 #include "pointscale/plane_fit.h"
 
@@ -15,7 +16,12 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   const Points& s = support.points();
   const Eigen::VectorXd inv_h2 = h.array().square().inverse();
   // Anisotropic weights: |d|^2 + (1/sheet^2 - 1)(n.d)^2 in place of |d|^2.
+  Points estimated;
   const Points* sheet_normals = options.support_normals;
+  if (!sheet_normals && options.thin_sheets) {
+    estimated = pca_normals(support, std::min<int>(16, support.size()));
+    sheet_normals = &estimated;
+  }
   const double sheet_extra = sheet_normals ? 1.0 / (options.sheet * options.sheet) - 1.0 : 0.0;
   MlsResult out;
   out.positions.resize(n, 3);

@@ -17,6 +17,7 @@ struct MlsOptions {
   // 2 sheet h apart) are not averaged into one. nullptr keeps isotropic weights.
   const Points* support_normals = nullptr;
   double sheet = 0.2;         // normal kernel width as a fraction of h, in (0, 1]
+  bool thin_sheets = false;   // the same weights with normals estimated from 16 support neighbours
 };
 
 struct MlsResult {
