@@ -269,7 +269,9 @@ def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decima
     the level below, along its normals, meet the next finer surface. The finest level therefore
     resamples the input's MLS surface: reconstruct() gives it back exactly, not the input points.
     settings["rays_missed"] counts, per band, rays that found no surface (these fall back to the
-    orthogonal projection of their origin); rays_missed_points(dec) lists them.
+    orthogonal projection of their origin, so those points of the finest level may lie off the
+    input surface); rays_missed_points(dec) lists them, and stats[l]["not_converged"] repeats
+    the count per level.
     fine_kernel  kernel of the input's own MLS surface, which the finest level resamples, as a
                  multiple of the input's spacing: small, so that it stays close to the samples
     """
