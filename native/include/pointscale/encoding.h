@@ -25,7 +25,8 @@ MultiscaleModel encode_onto(const Points& points, const Points& base, const Poin
 // Closest points on the MLS surface of `base` for points that may lie far from it (many kernel
 // widths, beyond the surface's radius of curvature). mls_project's fixed-point iteration swings
 // with slope -distance x curvature there, so this starts at the nearest sample, where the first
-// fit is well posed, and halves a point's step whenever its step grows.
+// fit is well posed, scales each step by 1 / (1 + distance x curvature) with the curvature seen
+// between the last two feet (a Newton step), and halves it further whenever a step grows.
 // x  #X by 3; base  index on the #B samples; h  #B kernel widths.
 MlsResult project_from_afar(const Points& x, const SpatialIndex& base, const Eigen::VectorXd& h,
                             const MlsOptions& options, const ProgressStage& stage = {});
