@@ -394,3 +394,13 @@ def test_progress_and_cancel(call):
         raise KeyError("from the callback")
     with pytest.raises(KeyError):
         call(boom)
+
+
+def test_encoded_and_rayshoot_decompositions_save_and_load(tmp_path):
+    p = ps.shapes.bumpy_sphere(6000)
+    for dec in (ps.encode(p, ps.shapes.sphere(3000)), ps.decompose_rayshoot(p, 3)):
+        dec.save(tmp_path / "d.npz")
+        back = ps.load(tmp_path / "d.npz")
+        assert back.settings == dec.settings
+        gains = [0.5] * dec.n_bands
+        np.testing.assert_array_equal(ps.reconstruct(back, gains), ps.reconstruct(dec, gains))
