@@ -235,6 +235,7 @@ def worker_pointscale(args: argparse.Namespace) -> int:
             "reconstruct_median_ms": statistics.median(times) * 1e3,
             "reconstruct_min_ms": min(times) * 1e3,
             "reconstruct_reps": len(times),
+            "reconstruct_all_ms": [t * 1e3 for t in times],
             "reconstruct_max_err_rel": float(err.max() / diag),
         })
     print(json.dumps(res), flush=True)
