@@ -448,8 +448,11 @@ def main(argv: list[str] | None = None) -> int:
     ps_why = "skipped (--no-pointscale)"
     if not args.no_pointscale:
         chk = subprocess.run([sys.executable, "-c",
-                              "import pointscale, sys; print(getattr(pointscale, '__version__', '?'), "
-                              "pointscale.__file__)"], capture_output=True, text=True)
+                              "import pointscale, os, time; from pointscale import _core; "
+                              "print(getattr(pointscale, '__version__', '?'), pointscale.__file__, "
+                              "'| _core built', time.strftime('%Y-%m-%d %H:%M:%S UTC', "
+                              "time.gmtime(os.path.getmtime(_core.__file__))))"],
+                             capture_output=True, text=True)
         if chk.returncode == 0:
             have_ps = True
             print("pointscale:", chk.stdout.strip(), "| repo HEAD", core_revision())
