@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import pointscale as ps
-from conftest import diagonal, shared_model
+from helpers import diagonal, shared_model
 from pointscale.io import read_ply, write_ply
 
 

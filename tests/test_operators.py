@@ -358,7 +358,7 @@ def test_decompose_rayshoot_encoding_and_bad_options():
 
 @pytest.mark.data
 def test_encode_a_scan_onto_its_ellipsoid():
-    from conftest import shared_model
+    from helpers import shared_model
     from plyfile import PlyData
     v = PlyData.read(str(shared_model("bunny.ply")))["vertex"]
     p = np.column_stack([v["x"], v["y"], v["z"]]).astype(np.float64)

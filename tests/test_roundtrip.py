@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import pointscale as ps
-from conftest import diagonal
+from helpers import diagonal
 
 SHAPES = {
     "noisy sphere": lambda: ps.shapes.sphere(20000, noise=0.01),

@@ -1,3 +1,5 @@
+"""Helpers shared by the package tests (imported as `helpers`; tests/blender has its own `blender_helpers`)."""
+
 import os
 from pathlib import Path
 
