@@ -1,7 +1,8 @@
 // Weighted least-squares plane through a small set of points (Eq. 2-3 of the paper):
 // the weighted average a and the direction of smallest weighted covariance n.
 #pragma once
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
 
@@ -25,6 +26,30 @@ inline void gaussian_weights(const double* d2, const double* inv_h2, int count, 
   for (int j = 0; j < count; ++j) weights[j] = std::exp(min_e - d2[j] * inv_h2[j]);
 }
 
+// Unit eigenvector of the smallest eigenvalue of a symmetric positive semi-definite 3x3 matrix,
+// or a zero vector when two eigenvalues vanish (no plane). The adjugate has the same
+// eigenvectors with eigenvalues (l2 l3, l1 l3, l1 l2), so its dominant one is the normal; five
+// squarings raise the ratio l1 / l2 to the 32nd power. No trigonometry, and deterministic.
+inline Vec3 smallest_eigenvector(const Mat3& c, double trace) {
+  Mat3 adj;
+  adj(0, 0) = c(1, 1) * c(2, 2) - c(1, 2) * c(1, 2);
+  adj(1, 1) = c(0, 0) * c(2, 2) - c(0, 2) * c(0, 2);
+  adj(2, 2) = c(0, 0) * c(1, 1) - c(0, 1) * c(0, 1);
+  adj(0, 1) = adj(1, 0) = c(0, 2) * c(1, 2) - c(0, 1) * c(2, 2);
+  adj(0, 2) = adj(2, 0) = c(0, 1) * c(1, 2) - c(0, 2) * c(1, 1);
+  adj(1, 2) = adj(2, 1) = c(0, 1) * c(0, 2) - c(0, 0) * c(1, 2);
+  const double scale = adj.cwiseAbs().maxCoeff();
+  if (!(scale > 1e-24 * trace * trace)) return Vec3::Zero();
+  adj /= scale;
+  for (int i = 0; i < 5; ++i) {
+    adj = (adj * adj).eval();
+    adj /= adj.cwiseAbs().maxCoeff();
+  }
+  int best = 0;
+  adj.colwise().squaredNorm().maxCoeff(&best);
+  return adj.col(best).normalized();
+}
+
 // Fits the plane through points rows `indices[0..count)` of `points` with `weights`.
 // `reference` is any nearby point; sums are taken relative to it for precision.
 inline PlaneFit fit_weighted_plane(const Points& points, const Index* indices, const double* weights,
@@ -44,14 +69,13 @@ inline PlaneFit fit_weighted_plane(const Points& points, const Index* indices, c
   const Vec3 m = s / w_sum;
   const Mat3 cov = ss / w_sum - m * m.transpose();
   fit.mean = reference + m;
-  Eigen::SelfAdjointEigenSolver<Mat3> eig;
-  eig.computeDirect(cov);
-  const Vec3 ev = eig.eigenvalues();
-  const double trace = ev.sum();
-  // Two vanishing eigenvalues: collinear or a single point, no plane is defined.
-  if (!(trace > 0.0) || ev(1) <= 1e-12 * trace) return fit;
-  fit.normal = eig.eigenvectors().col(0).normalized();
-  fit.variation = std::max(0.0, ev(0)) / trace;
+  const double trace = cov.trace();
+  if (!(trace > 0.0)) return fit;
+  // Two vanishing eigenvalues (collinear or a single point) leave the adjugate at zero.
+  const Vec3 normal = smallest_eigenvector(cov, trace);
+  if (!(normal.squaredNorm() > 0.5)) return fit;
+  fit.normal = normal;
+  fit.variation = std::max(0.0, normal.dot(cov * normal)) / trace;
   fit.ok = true;
   return fit;
 }
