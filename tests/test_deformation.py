@@ -69,3 +69,13 @@ def test_turning_the_base_over_keeps_detail_on_the_outside():
     height = np.linalg.norm(result[:, [0, 2]], axis=1) - radius
     expected = points[:, 2] - dec.base[:, 2] + dec.base[:, 2]
     assert np.abs(height - expected).max() < 0.003
+
+
+@pytest.mark.parametrize("n", [3000, 40000])
+def test_an_unedited_explicit_base_gives_the_default_reconstruction(n):
+    """Sparse levels have clusters whose mean normal is far from their points' normals; the
+    orientation carried to an explicit base must still agree with the stored one."""
+    points = ps.shapes.bumpy_sphere(n)
+    dec = ps.decompose(points, levels=4)
+    diagonal = np.linalg.norm(np.ptp(points, axis=0))
+    assert np.abs(ps.reconstruct(dec, base=dec.base.copy()) - ps.reconstruct(dec)).max() <= 1e-9 * diagonal

@@ -1,6 +1,7 @@
 #include "pointscale/level_support.h"
 
 #include <Eigen/LU>
+#include <Eigen/SVD>
 #include <cmath>
 #include <limits>
 
@@ -136,42 +137,34 @@ Points transported_references(const Points& original, const Points& edited, cons
                               const LevelSupport& support) {
   const Points b0 = support_centroids(original, support);
   const Points b1 = support_centroids(edited, support);
-  // Oriented normal of each cluster: the mean of its points' oriented normals.
-  Points nc = Points::Zero(support.clusters, 3);
-  for (Eigen::Index i = 0; i < original.rows(); ++i) nc.row(support.labels[i]) += original_normals.row(i);
   const int k = support.neighbors;
-  Points ref_c(support.clusters, 3);
-  parallel_for(static_cast<std::size_t>(support.clusters), [&](std::size_t b, std::size_t e) {
+  // The rotation that best maps each cluster's neighbourhood from the original to the edited
+  // level (Kabsch). Unedited it is the identity, so the references are the stored normals.
+  std::vector<Mat3> rotation(static_cast<std::size_t>(support.clusters));
+  parallel_for(rotation.size(), [&](std::size_t b, std::size_t e) {
     for (std::size_t cc = b; cc < e; ++cc) {
       const Index c = static_cast<Index>(cc);
-      Vec3 n = nc.row(c).transpose();
-      if (!(n.norm() > 0)) n = Vec3::UnitZ();
-      n.normalize();
-      const Vec3 t1 = n.unitOrthogonal();
-      const Vec3 t2 = n.cross(t1);  // t1 x t2 = n
-      Eigen::Matrix<double, 3, 2> a = Eigen::Matrix<double, 3, 2>::Zero();
-      Eigen::Matrix2d m = Eigen::Matrix2d::Zero();
       const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(c) * k;
+      const double h = support.h(c);
+      Mat3 cov = Mat3::Zero();
       for (int j = 1; j < k; ++j) {
         const Vec3 e0 = (b0.row(nb[j]) - b0.row(c)).transpose();
         const Vec3 e1 = (b1.row(nb[j]) - b1.row(c)).transpose();
-        const double h = support.h(c);
-        const double w = std::exp(-e0.squaredNorm() / (h * h));
-        const Eigen::Vector2d u(t1.dot(e0), t2.dot(e0));
-        a.noalias() += w * e1 * u.transpose();
-        m.noalias() += w * u * u.transpose();
+        cov.noalias() += std::exp(-e0.squaredNorm() / (h * h)) * e0 * e1.transpose();
       }
-      Vec3 r = n;
-      if (std::abs(m.determinant()) > 1e-12 * m.trace() * m.trace()) {
-        const Eigen::Matrix<double, 3, 2> f = a * m.inverse();
-        const Vec3 cross = f.col(0).cross(f.col(1));
-        if (cross.norm() > 0) r = cross.normalized();
-      }
-      ref_c.row(c) = r.transpose();
+      rotation[cc] = Mat3::Identity();
+      const Eigen::JacobiSVD<Mat3> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      const Eigen::Vector3d s = svd.singularValues();
+      // A neighbourhood on a line does not fix the rotation about it: keep the identity there.
+      if (!(s(1) > 1e-9 * s(0))) continue;
+      Mat3 d = Mat3::Identity();
+      d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+      rotation[cc] = svd.matrixV() * d * svd.matrixU().transpose();
     }
-  });
+  }, {}, 1024);
   Points ref(original.rows(), 3);
-  for (Eigen::Index i = 0; i < original.rows(); ++i) ref.row(i) = ref_c.row(support.labels[i]);
+  for (Eigen::Index i = 0; i < original.rows(); ++i)
+    ref.row(i) = (rotation[support.labels[i]] * original_normals.row(i).transpose()).transpose();
   return ref;
 }
 

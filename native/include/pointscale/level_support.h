@@ -51,9 +51,10 @@ Points support_normals(const Points& query, const Index* query_labels, const Poi
                        const LevelSupport& support, const Points& reference,
                        const ProgressStage& stage = {});
 
-// Per-point orientation references for an edited level 0: the stored oriented normals carried
-// through the local tangent map from the original to the edited points (a cofactor transport),
-// so the sign stays right even where an edit turns the surface by more than 90 degrees.
+// Per-point orientation references for an edited level 0: each stored oriented normal turned by
+// the rotation that best maps its cluster's neighbourhood onto the edited one (Kabsch), so the
+// sign stays right even where an edit turns the surface by more than 90 degrees. Unedited, the
+// rotations are the identity and the references are the stored normals.
 // original, edited  #P by 3; original_normals #P by 3 oriented. Returns #P by 3.
 Points transported_references(const Points& original, const Points& edited, const Points& original_normals,
                               const LevelSupport& support);
