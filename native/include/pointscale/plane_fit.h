@@ -28,8 +28,8 @@ inline void gaussian_weights(const double* d2, const double* inv_h2, int count, 
 
 // Unit eigenvector of the smallest eigenvalue of a symmetric positive semi-definite 3x3 matrix,
 // or a zero vector when two eigenvalues vanish (no plane). The adjugate has the same
-// eigenvectors with eigenvalues (l2 l3, l1 l3, l1 l2), so its dominant one is the normal; five
-// squarings raise the ratio l1 / l2 to the 32nd power. No trigonometry, and deterministic.
+// eigenvectors with eigenvalues (l2 l3, l1 l3, l1 l2), so its dominant one is the normal; each
+// squaring squares the ratio l1 / l2. No trigonometry, and deterministic.
 inline Vec3 smallest_eigenvector(const Mat3& c, double trace) {
   Mat3 adj;
   adj(0, 0) = c(1, 1) * c(2, 2) - c(1, 2) * c(1, 2);
@@ -41,9 +41,13 @@ inline Vec3 smallest_eigenvector(const Mat3& c, double trace) {
   const double scale = adj.cwiseAbs().maxCoeff();
   if (!(scale > 1e-24 * trace * trace)) return Vec3::Zero();
   adj /= scale;
-  for (int i = 0; i < 5; ++i) {
+  // Square until the matrix is rank one to working precision (tr^2 = |A|^2 only then), so the
+  // column picked below is the eigenvector itself and the result is a smooth function of c.
+  for (int i = 0; i < 10; ++i) {
     adj = (adj * adj).eval();
     adj /= adj.cwiseAbs().maxCoeff();
+    const double tr = adj.trace();
+    if (tr * tr - adj.squaredNorm() <= 1e-30 * tr * tr) break;
   }
   int best = 0;
   adj.colwise().squaredNorm().maxCoeff(&best);
