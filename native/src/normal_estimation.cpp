@@ -57,10 +57,10 @@ void orient_normals(const SpatialIndex& index, Points& normals, int k) {
     for (Index o : adj[i])
       if (!visited[o]) heap.push({1.0 - std::abs(normals.row(i).dot(normals.row(o))), {i, o}});
   };
+  std::vector<Index> component;
   for (Index seed : order) {
     if (visited[seed]) continue;
-    const Vec3 out = p.row(seed).transpose() - centre;
-    if (normals.row(seed).dot(out) < 0.0) normals.row(seed) *= -1.0;
+    component.assign(1, seed);
     visit(seed);
     while (!heap.empty()) {
       const auto [cost, edge] = heap.top();
@@ -69,7 +69,14 @@ void orient_normals(const SpatialIndex& index, Points& normals, int k) {
       if (visited[to]) continue;
       if (normals.row(from).dot(normals.row(to)) < 0.0) normals.row(to) *= -1.0;
       visit(to);
+      component.push_back(to);
     }
+    // Outward by a vote of the whole component, not by the seed alone: the farthest point is
+    // often an outlier whose normal lies nearly in the tangent plane.
+    double vote = 0.0;
+    for (Index i : component) vote += normals.row(i).dot(p.row(i) - centre.transpose());
+    if (vote < 0.0)
+      for (Index i : component) normals.row(i) *= -1.0;
   }
 }
 
