@@ -37,48 +37,74 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
                                 const ProgressStage& stage) {
   const double stop = 1e-12 * scale;
   const Index c_count = support.clusters;
-  std::vector<Index> own(static_cast<std::size_t>(c_count));
   Points anchor_reference(c_count, 3);
-  for (Index c = 0; c < c_count; ++c) { own[c] = c; anchor_reference.row(c) = reference.row(support.anchors[c]); }
-  std::vector<double> moves(c_count, std::numeric_limits<double>::infinity()), damping(c_count, 1.0);
-  std::vector<unsigned char> pinned(c_count, 0);
+  for (Index c = 0; c < c_count; ++c) anchor_reference.row(c) = reference.row(support.anchors[c]);
+  const int k = support.neighbors;
+  const double never = std::numeric_limits<double>::infinity();
+  std::vector<double> moves(c_count, never), damping(c_count, 1.0), earlier(c_count, never);
+  std::vector<unsigned char> pinned(c_count, 0), active(c_count, 1);
+  std::vector<Index> todo;
   Consistency out;
   for (int round = 0;; ++round) {
     double largest = 0.0;
+    bool settled = false;
     for (int it = 0; it < max_iterations; ++it, ++out.iterations) {
-      stage.report(std::min(1.0, static_cast<double>(out.iterations) / (2.0 * max_iterations)));
+      stage.report(std::min(1.0, static_cast<double>(out.iterations) / (4.0 * max_iterations)));
+      if (it == max_iterations / 2) earlier = moves;
+      // Only anchors that moved, or whose neighbours moved, can move again; once none is left,
+      // one sweep over all of them confirms that they have settled.
+      todo.clear();
+      for (Index c = 0; c < c_count; ++c) if (active[c] && !pinned[c]) todo.push_back(c);
+      const bool sweep = todo.empty();
+      if (sweep) for (Index c = 0; c < c_count; ++c) if (!pinned[c]) todo.push_back(c);
       const Points anchors = support_centroids(level, support);
-      const Points normals = support_normals(anchors, own.data(), anchors, support, anchor_reference);
-      parallel_for(static_cast<std::size_t>(c_count), [&](std::size_t b, std::size_t e) {
-        for (std::size_t c = b; c < e; ++c) {
-          if (pinned[c]) { moves[c] = 0.0; continue; }
+      Points query(static_cast<Eigen::Index>(todo.size()), 3), query_reference(query.rows(), 3);
+      for (std::size_t j = 0; j < todo.size(); ++j) {
+        query.row(j) = anchors.row(todo[j]);
+        query_reference.row(j) = anchor_reference.row(todo[j]);
+      }
+      const Points normals = support_normals(query, todo.data(), anchors, support, query_reference);
+      parallel_for(todo.size(), [&](std::size_t b, std::size_t e) {
+        for (std::size_t j = b; j < e; ++j) {
+          const Index c = todo[j];
           const Index i = support.anchors[c];
-          const Vec3 nrm = normals.row(static_cast<Eigen::Index>(c)).transpose();
+          const Vec3 nrm = normals.row(static_cast<Eigen::Index>(j)).transpose();
           const Vec3 f = fine.row(i).transpose();
           const Vec3 p = level.row(i).transpose();
           const Vec3 target = f - (f - p).dot(nrm) * nrm;
           const double full = (target - p).norm();
-          if (full > moves[c]) damping[c] = std::max(damping[c] * 0.5, 1.0 / 64.0);
+          // Halve the step while the move grows (a swing), regain it while the move shrinks.
+          damping[c] = full > moves[c] ? std::max(damping[c] * 0.5, 1.0 / 64.0) : std::min(1.0, damping[c] * 1.5);
           moves[c] = full;
           level.row(i) = (p + damping[c] * (target - p)).transpose();
         }
       });
-      largest = *std::max_element(moves.begin(), moves.end());
-      if (largest <= stop) break;
+      largest = 0.0;
+      std::fill(active.begin(), active.end(), 0);
+      for (const Index c : todo) {
+        if (!(moves[c] > stop)) continue;
+        largest = std::max(largest, moves[c]);
+        const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(c) * k;
+        for (int j = 0; j < k; ++j) active[nb[j]] = 1;
+      }
+      if (largest <= stop && sweep) { settled = true; break; }
+      // A neighbour woken by another's move starts afresh: its small old move is no measure.
+      for (Index c = 0; c < c_count; ++c) if (active[c] && moves[c] <= stop) moves[c] = never;
     }
     out.residual = largest;
-    if (largest <= stop) break;
-    // Pin the worst anchors (all unsettled ones after a few rounds), then let the others
-    // settle again around them. Each round pins at least one, so this ends.
-    const double pin_above = round < 8 ? std::max(stop, 0.1 * largest) : stop;
+    if (settled) break;
+    // Pin the anchors that stopped settling over the second half of the round (all unsettled
+    // ones after a few rounds) and let the others settle around them. Anchors that still
+    // converge keep going, and from round 8 on every round pins at least one, so this ends.
+    const bool last_chance = round >= 8;
     for (Index c = 0; c < c_count; ++c)
-      if (!pinned[c] && moves[c] > pin_above) {
+      if (!pinned[c] && moves[c] > stop && moves[c] < never && (last_chance || moves[c] > 0.25 * earlier[c])) {
         pinned[c] = 1;
         ++out.pinned;
         level.row(support.anchors[c]) = fine.row(support.anchors[c]);
       }
-    std::fill(damping.begin(), damping.end(), 1.0);
-    std::fill(moves.begin(), moves.end(), std::numeric_limits<double>::infinity());
+    std::fill(moves.begin(), moves.end(), never);
+    std::fill(active.begin(), active.end(), 1);
   }
   const Points normals = level_normals(level, support, reference);
   std::vector<unsigned char> is_anchor(static_cast<std::size_t>(level.rows()), 0);
@@ -121,6 +147,7 @@ MultiscaleModel decompose(const Points& points, const Points* input_normals, con
     // Decimate P^l to Q^{l-1}: |Q^{l-1}| = gamma^(step+1) n (Sec. 5.2).
     const auto target = static_cast<std::size_t>(std::floor(std::pow(options.decimation, step + 1) * n));
     Clustering clusters = cluster_decimate(fine, target, options.max_variation);
+    if (options.diffusion) clusters.centroids = diffuse(clusters.centroids, *options.diffusion);
     stage.report(0.05);
     SpatialIndex q_index(clusters.centroids);
     const Eigen::VectorXd h = options.kernel * local_spacing(q_index, 6);
