@@ -324,13 +324,8 @@ def test_project_sheets_bad_input():
 
 
 # ----------------------------------------------------------------------------------------------
-# decompose(smoother=..., encoding=...): run once the lead's hook in multiscale.decompose is in.
+# decompose(smoother=..., encoding=...)
 
-needs_hook = pytest.mark.skipif("smoother" not in __import__("inspect").signature(ps.decompose).parameters,
-                                reason="decompose() has no smoother/encoding options yet (hook in multiscale.py)")
-
-
-@needs_hook
 def test_decompose_diffusion_smoother_round_trip_and_smoother_levels():
     p = ps.shapes.bumpy_sphere(20000, fine_frequency=40.0)
     dec = ps.decompose(p, 4, smoother="diffusion")
@@ -342,7 +337,6 @@ def test_decompose_diffusion_smoother_round_trip_and_smoother_levels():
     assert radial_amplitudes(dec.level(0), [3.0, 40.0])[0] < radial_amplitudes(plain.level(0), [3.0, 40.0])[0]
 
 
-@needs_hook
 def test_decompose_rayshoot_encoding_and_bad_options():
     p = ps.shapes.bumpy_sphere(20000)
     dec = ps.decompose(p, 4, encoding="rayshoot", smoother="diffusion")

@@ -183,7 +183,8 @@ PYBIND11_MODULE(_core, m) {
          py::arg("progress") = py::none());
 
   m.def("decompose", [](const DoubleArray& points, py::object normals, int levels, double decimation, double kernel,
-                        int neighbors, double tolerance, int max_iterations, double max_variation, py::object progress) {
+                        int neighbors, double tolerance, int max_iterations, double max_variation, py::object diffusion,
+                        py::object progress) {
     Points p = to_points(points);
     Points n;
     const bool has_normals = !normals.is_none();
@@ -196,6 +197,15 @@ PYBIND11_MODULE(_core, m) {
     o.mls.neighbors = neighbors;
     o.mls.tolerance = tolerance;
     o.mls.max_iterations = max_iterations;
+    DiffusionOptions dif;  // (neighbors, lambda, mu, iterations) from operators._diffusion_options
+    if (!diffusion.is_none()) {
+      auto t = diffusion.cast<py::tuple>();
+      dif.neighbors = t[0].cast<int>();
+      dif.lambda = t[1].cast<double>();
+      dif.mu = t[2].cast<double>();
+      dif.iterations = t[3].cast<int>();
+      o.diffusion = &dif;
+    }
     PythonProgress pp(progress);
     return without_gil([&] { return decompose(p, has_normals ? &n : nullptr, o, pp.get()); });
   });

@@ -3,6 +3,7 @@
 #pragma once
 #include <vector>
 
+#include "pointscale/diffusion.h"
 #include "pointscale/level_support.h"
 #include "pointscale/mls_projection.h"
 #include "pointscale/progress.h"
@@ -16,6 +17,7 @@ struct DecomposeOptions {
   double max_variation = 0.05;  // decimation: split curved clusters first above this
   MlsOptions mls;             // projection neighbours, tolerance, iteration cap
   int consistency_iterations = 60;  // cap per round for making offsets exactly normal
+  const DiffusionOptions* diffusion = nullptr;  // smoother "diffusion" (Sec. 5.1): diffuse each Q^{l-1} first
 };
 
 // What happened at one level, for the user.

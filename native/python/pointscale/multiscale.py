@@ -117,7 +117,9 @@ def _level_index(l, count: int) -> int:
 
 def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: float = 1.0, normals=None,
               neighbors: int = 24, tolerance: float = 1e-7, max_iterations: int = 30,
-              max_variation: float = 0.05, threads: int = 0, progress=None) -> Decomposition:
+              max_variation: float = 0.05, smoother: str = "mls", encoding: str = "projection",
+              diffusion_iterations: int = 10, lam: float = 0.5, taubin: bool = True, diffusion_neighbors: int = 10,
+              threads: int = 0, progress=None) -> Decomposition:
     """Builds the multiscale representation P^0 + D^0 + ... + D^{k-1} of a point cloud (Sec. 7).
 
     points      (n, 3) positions; a mesh's vertices work as they are (faces are not used)
@@ -128,7 +130,26 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     neighbors   support points in each plane fit
     threads     worker threads, 0 for all cores
     progress    progress(fraction) -> bool; returning False stops and raises pointscale.Cancelled
+    smoother    "mls" (Sec. 7) or "diffusion": each decimated level is first smoothed by
+                diffusion_iterations Laplacian steps of lam over diffusion_neighbors, Taubin's
+                volume-keeping variant when taubin (Sec. 5.1)
+    encoding    "projection" (Sec. 6.2, exact round trip) or "rayshoot" (Sec. 6.1, see
+                decompose_rayshoot: the finest level resamples the input surface)
     """
+    if smoother not in ("mls", "diffusion"):
+        raise ValueError(f"smoother must be 'mls' or 'diffusion', got {smoother!r}")
+    if encoding not in ("projection", "rayshoot"):
+        raise ValueError(f"encoding must be 'projection' or 'rayshoot', got {encoding!r}")
+    from . import operators  # imports this module: import it late
+    if encoding == "rayshoot":
+        return operators.decompose_rayshoot(
+            points, levels, smoother=smoother, decimation=decimation, kernel=kernel, normals=normals,
+            neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations, max_variation=max_variation,
+            diffusion_iterations=diffusion_iterations, lam=lam, taubin=taubin,
+            diffusion_neighbors=diffusion_neighbors, threads=threads, progress=progress)
+    diffusion = None
+    if smoother == "diffusion":
+        diffusion = operators._diffusion_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
     levels = positive(levels, "levels", integer=True)
     if levels < 2:
         raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
@@ -155,10 +176,13 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     progress = as_callback(progress)
     origin = centre(p)
     settings = dict(levels=levels, decimation=decimation, kernel=kernel, neighbors=neighbors,
-                    tolerance=tolerance, max_iterations=max_iterations, max_variation=max_variation)
+                    tolerance=tolerance, max_iterations=max_iterations, max_variation=max_variation,
+                    smoother=smoother, encoding=encoding)
+    if diffusion is not None:
+        settings["diffusion"] = dict(zip(("neighbors", "lam", "mu", "iterations"), diffusion))
     _core.set_threads(int(threads))
     model = _core.decompose(p - origin, n_arr, levels, decimation, kernel, neighbors, tolerance,
-                            max_iterations, max_variation, progress)
+                            max_iterations, max_variation, diffusion, progress)
     return Decomposition(model, origin, settings)
 
 
