@@ -7,6 +7,7 @@ bpy scripts can call them directly; they are safe to run in a worker thread.
 from __future__ import annotations
 
 import inspect
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,6 +22,7 @@ class Layout:
     dec: object
     levels: np.ndarray  # (k, n, 3)
     normals: np.ndarray  # (k, n, 3)
+    warnings: tuple = ()  # what the engine warned about, for the operator's report
 
     @property
     def k(self) -> int:
@@ -67,11 +69,13 @@ def decompose(ps, points: np.ndarray, progress=None, smoother="MLS", encoding="P
     if problem:
         raise ValueError(problem)
     fn, extra = decompose_function(ps, smoother, encoding)
-    dec = fn(np.asarray(points, dtype=np.float64), progress=progress, **kwargs, **extra)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        dec = fn(np.asarray(points, dtype=np.float64), progress=progress, **kwargs, **extra)
     k = dec.n_bands
     levels = np.stack([dec.level(l) for l in range(k)])
     normals = np.stack([dec.normals(l) for l in range(k)])
-    return Layout(dec, levels, normals)
+    return Layout(dec, levels, normals, tuple(str(w.message) for w in caught))
 
 
 def rebuild(ps, dec, base: np.ndarray, gains=None) -> np.ndarray:

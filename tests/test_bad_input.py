@@ -76,3 +76,8 @@ def test_load_rejects_a_file_that_is_not_a_decomposition(tmp_path):
     (tmp_path / "y.npz").write_bytes(b"garbage")
     with pytest.raises(ValueError, match="cannot read"):
         ps.load(tmp_path / "y.npz")
+
+
+def test_a_very_coarse_base_is_warned_about():
+    with pytest.warns(UserWarning, match="62 support points at level 0"):
+        ps.decompose(ps.shapes.bumpy_sphere(4000), levels=4)

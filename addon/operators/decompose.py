@@ -88,6 +88,8 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
             bpy.ops.object.mode_set(mode="OBJECT")
         writeback.apply_layout(obj, layout)
         k = layout.k
+        for message in layout.warnings:
+            self.report({"WARNING"}, f"Decompose '{obj.name}': {message}")
         self.report({"INFO"}, f"Decomposed '{obj.name}': {n} vertices, {k + 1} levels, {k} bands")
         return {"FINISHED"}
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -12,6 +13,9 @@ from ._checks import as_callback, as_points, centre, positive, require_surface
 
 #: The coarsest level keeps gamma**(levels-1) * n points; fewer than this cannot carry a surface.
 MIN_COARSE_POINTS = 8
+# Below this many support points a closed base has too few clusters to keep its shape: the
+# kernels then span a large part of it, and an edit of the base reaches far across it.
+FEW_COARSE_POINTS = 100
 _FORMAT_VERSION = 1
 
 
@@ -168,6 +172,11 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
                          f"(the coarsest level keeps decimation**(levels-1) of them and needs {MIN_COARSE_POINTS}); "
                          f"got {len(p)}")
     require_surface(p)
+    coarse = int(np.floor(decimation ** (levels - 1) * len(p)))
+    if coarse < FEW_COARSE_POINTS:
+        warnings.warn(f"levels={levels} and decimation={decimation} leave {coarse} support points at level 0 of "
+                      f"{len(p)}; a base this coarse can be distorted. Use fewer levels or a larger decimation "
+                      f"(at least {FEW_COARSE_POINTS} is safe).", stacklevel=2)
     n_arr = None
     if normals is not None:
         n_arr = as_points(normals, "normals")
