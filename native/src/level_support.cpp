@@ -1,5 +1,6 @@
 #include "pointscale/level_support.h"
 
+#include <algorithm>
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <cmath>
@@ -43,10 +44,18 @@ Points support_normals(const Points& query, const Index* query_labels, const Poi
         ih2[j] = 1.0 / (h * h);
       }
       gaussian_weights(d2.data(), ih2.data(), k, w.data());
-      const PlaneFit fit = fit_weighted_plane(centroids, nb, w.data(), k, x);
+      // A floor on the weights keeps the fit well conditioned where one anchor dominates (a
+      // query far from the others, as at raw-scan outliers): the normal must be a smooth
+      // function of the anchors, since reconstruction re-evaluates it.
+      for (int j = 0; j < k; ++j) w[j] = std::max(w[j], 1e-6);
+      PlaneFit fit = fit_weighted_plane(centroids, nb, w.data(), k, x);
+      if (!fit.ok) {
+        // Never fall back on the reference's direction: it differs between the passes.
+        std::fill(w.begin(), w.end(), 1.0);
+        fit = fit_weighted_plane(centroids, nb, w.data(), k, x);
+      }
       const Vec3 ref = reference.row(i).transpose();
-      Vec3 nrm = fit.ok ? fit.normal : ref.normalized();
-      if (!fit.ok && !(ref.squaredNorm() > 0)) nrm = Vec3::UnitZ();
+      Vec3 nrm = fit.ok ? fit.normal : Vec3(Vec3::UnitZ());
       if (nrm.dot(ref) < 0.0) nrm = -nrm;
       normals.row(i) = nrm.transpose();
     }
