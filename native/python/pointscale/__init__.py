@@ -8,12 +8,12 @@ from .multiscale import Decomposition, blend, decompose, load, reconstruct, reco
 from .surface import decimate, estimate_normals, project
 from .operators import (Morph, decompose_rayshoot, diffusion_levels, ellipsoid_base, encode, morph, project_sheets,
                         rays_missed_points, shoot_rays, smooth_diffusion)
-from . import shapes
+from . import io, shapes
 
 __version__ = "0.1.0"
 __all__ = [
     "Cancelled", "Decomposition", "blend", "decimate", "decompose", "estimate_normals", "load",
-    "project", "reconstruct", "reconstruct_levels", "shapes",
+    "io", "project", "reconstruct", "reconstruct_levels", "shapes",
     "Morph", "decompose_rayshoot", "diffusion_levels", "ellipsoid_base", "encode", "morph", "project_sheets",
     "rays_missed_points", "shoot_rays", "smooth_diffusion",
 ]
