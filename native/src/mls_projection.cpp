@@ -1,6 +1,8 @@
 #include "pointscale/mls_projection.h"
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 #include <limits>
 
 #include "pointscale/normal_estimation.h"
@@ -28,17 +30,35 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   out.normals.resize(n, 3);
   std::vector<unsigned char> failed(n, 0), degenerate(n, 0);
 
+  // Each point queries kc > k candidates once; later iterations take the k nearest of them to
+  // the moved foot, and query again only when the foot has moved so far that a closer point
+  // could lie outside the candidates (d_k + 2 moved > d_kc): the same neighbours as a fresh query.
+  const int kc = std::min<int>(k + 8, support.size());
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-    std::vector<Index> idx(k);
-    std::vector<double> d2(k), ih2(k), w(k);
+    std::vector<Index> idx(k), cand(kc);
+    std::vector<double> d2(k), ih2(k), w(k), cand_d2(kc);
+    std::vector<std::pair<double, Index>> order(kc);
     for (std::size_t i = b; i < e; ++i) {
       const Vec3 p = x.row(static_cast<Eigen::Index>(i)).transpose();
       Vec3 foot = p;
       Vec3 normal = Vec3::Zero();
       bool converged = false, ok = false;
       double last_step = std::numeric_limits<double>::infinity(), damping = 1.0;
+      Vec3 queried = foot;
+      int candidates = 0;
+      double reach = 0.0;  // d_kc - d_k at the last query: how far the foot may move, twice over
       for (int it = 0; it < options.max_iterations; ++it) {
-        const int found = support.knn(foot.data(), k, idx.data(), d2.data());
+        if (candidates == 0 || 2.0 * (foot - queried).norm() >= reach) {
+          queried = foot;
+          candidates = support.knn(foot.data(), kc, cand.data(), cand_d2.data());
+          const int kth = std::min(k, candidates) - 1;
+          reach = candidates > k ? std::sqrt(cand_d2[candidates - 1]) - std::sqrt(cand_d2[kth]) : 0.0;
+          if (candidates <= k) reach = std::numeric_limits<double>::infinity();  // all there is
+        }
+        for (int j = 0; j < candidates; ++j) order[j] = {(s.row(cand[j]).transpose() - foot).squaredNorm(), cand[j]};
+        const int found = std::min(k, candidates);
+        std::partial_sort(order.begin(), order.begin() + found, order.begin() + candidates);
+        for (int j = 0; j < found; ++j) { d2[j] = order[j].first; idx[j] = order[j].second; }
         for (int j = 0; j < found; ++j) ih2[j] = inv_h2(idx[j]);
         if (sheet_normals) {
           for (int j = 0; j < found; ++j) {
