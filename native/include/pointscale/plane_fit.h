@@ -1,6 +1,7 @@
 // Weighted least-squares plane through a small set of points (Eq. 2-3 of the paper):
 // the weighted average a and the direction of smallest weighted covariance n.
 #pragma once
+#include <algorithm>
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cmath>
@@ -31,27 +32,35 @@ inline void gaussian_weights(const double* d2, const double* inv_h2, int count, 
 // eigenvectors with eigenvalues (l2 l3, l1 l3, l1 l2), so its dominant one is the normal; each
 // squaring squares the ratio l1 / l2. No trigonometry, and deterministic.
 inline Vec3 smallest_eigenvector(const Mat3& c, double trace) {
-  Mat3 adj;
-  adj(0, 0) = c(1, 1) * c(2, 2) - c(1, 2) * c(1, 2);
-  adj(1, 1) = c(0, 0) * c(2, 2) - c(0, 2) * c(0, 2);
-  adj(2, 2) = c(0, 0) * c(1, 1) - c(0, 1) * c(0, 1);
-  adj(0, 1) = adj(1, 0) = c(0, 2) * c(1, 2) - c(0, 1) * c(2, 2);
-  adj(0, 2) = adj(2, 0) = c(0, 1) * c(1, 2) - c(0, 2) * c(1, 1);
-  adj(1, 2) = adj(2, 1) = c(0, 1) * c(0, 2) - c(0, 0) * c(1, 2);
-  const double scale = adj.cwiseAbs().maxCoeff();
+  // The six distinct entries of the symmetric adjugate (xx, yy, zz, xy, xz, yz); squaring
+  // only those does half the work of a general 3x3 product.
+  double a[6] = {c(1, 1) * c(2, 2) - c(1, 2) * c(1, 2), c(0, 0) * c(2, 2) - c(0, 2) * c(0, 2),
+                 c(0, 0) * c(1, 1) - c(0, 1) * c(0, 1), c(0, 2) * c(1, 2) - c(0, 1) * c(2, 2),
+                 c(0, 1) * c(1, 2) - c(0, 2) * c(1, 1), c(0, 1) * c(0, 2) - c(0, 0) * c(1, 2)};
+  auto max_abs = [](const double* m) {
+    double out = 0.0;
+    for (int j = 0; j < 6; ++j) out = std::max(out, std::abs(m[j]));
+    return out;
+  };
+  const double scale = max_abs(a);
   if (!(scale > 1e-24 * trace * trace)) return Vec3::Zero();
-  adj /= scale;
+  for (double& v : a) v /= scale;
   // Square until the matrix is rank one to working precision (tr^2 = |A|^2 only then), so the
   // column picked below is the eigenvector itself and the result is a smooth function of c.
   for (int i = 0; i < 10; ++i) {
-    adj = (adj * adj).eval();
-    adj /= adj.cwiseAbs().maxCoeff();
-    const double tr = adj.trace();
-    if (tr * tr - adj.squaredNorm() <= 1e-30 * tr * tr) break;
+    const double xx = a[0], yy = a[1], zz = a[2], xy = a[3], xz = a[4], yz = a[5];
+    const double b[6] = {xx * xx + xy * xy + xz * xz, xy * xy + yy * yy + yz * yz, xz * xz + yz * yz + zz * zz,
+                         xx * xy + xy * yy + xz * yz, xx * xz + xy * yz + xz * zz, xy * xz + yy * yz + yz * zz};
+    const double inv = 1.0 / max_abs(b);
+    for (int j = 0; j < 6; ++j) a[j] = b[j] * inv;
+    const double tr = a[0] + a[1] + a[2];
+    const double norm2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + 2.0 * (a[3] * a[3] + a[4] * a[4] + a[5] * a[5]);
+    if (tr * tr - norm2 <= 1e-30 * tr * tr) break;
   }
+  const Vec3 cols[3] = {Vec3(a[0], a[3], a[4]), Vec3(a[3], a[1], a[5]), Vec3(a[4], a[5], a[2])};
   int best = 0;
-  adj.colwise().squaredNorm().maxCoeff(&best);
-  return adj.col(best).normalized();
+  for (int j = 1; j < 3; ++j) if (cols[j].squaredNorm() > cols[best].squaredNorm()) best = j;
+  return cols[best].normalized();
 }
 
 // Fits the plane through points rows `indices[0..count)` of `points` with `weights`.
