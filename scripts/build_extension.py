@@ -25,6 +25,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -83,7 +84,15 @@ def build_wheels(pythons: list[str]) -> None:
             shutil.copy2(whl, WHEELS)
     for old in WHEELS.glob("plyfile-*.whl"):
         old.unlink()
-    run([sys.executable, "-m", "pip", "download", "plyfile>=1.0", "--no-deps", "--only-binary=:all:", "-d", WHEELS])
+    # plyfile resolved against the NumPy that Blender ships (bpy's, which setup.sh keeps
+    # installed): plyfile 1.1.5 needs NumPy 2, while Blender 4.2-5.0 ship NumPy 1.26.
+    import numpy
+
+    with tempfile.TemporaryDirectory() as tmp:
+        run([sys.executable, "-m", "pip", "download", "plyfile>=1.0", f"numpy=={numpy.__version__}",
+             "--only-binary=:all:", "-d", tmp])
+        for whl in Path(tmp).glob("plyfile-*.whl"):
+            shutil.copy2(whl, WHEELS / whl.name)
 
 
 def stage(manifest_text: str) -> Path:
