@@ -54,3 +54,12 @@ def test_undo_after_decompose():
     h.decompose(obj)
     bpy.ops.ed.undo()
     assert bpy.data.objects["Undo"].data.shape_keys is None
+
+
+def test_every_operator_registers_undo(addon):
+    # Undo itself cannot run headless (above); what makes it work in the UI is these flags.
+    from pointscale_addon.operators import CLASSES
+
+    assert len(CLASSES) >= 9
+    for cls in CLASSES:
+        assert {"REGISTER", "UNDO"} <= set(cls.bl_options), cls.bl_idname
