@@ -28,6 +28,15 @@ Points to_points(const DoubleArray& a) {
   return p;
 }
 
+// The points minus origin, in one copy (centring in NumPy first would hold a second one).
+Points to_points_centred(const DoubleArray& a, const DoubleArray& origin) {
+  Points p = to_points(a);
+  if (origin.size() != 3) throw std::invalid_argument("expected an origin of 3 numbers");
+  const Eigen::RowVector3d o(origin.data()[0], origin.data()[1], origin.data()[2]);
+  p.rowwise() -= o;
+  return p;
+}
+
 template <class T>
 py::array_t<T> to_array(const std::vector<T>& v, std::vector<py::ssize_t> shape) {
   py::array_t<T> out(shape);
@@ -182,10 +191,10 @@ PYBIND11_MODULE(_core, m) {
       }, py::arg("gains"), py::arg("base") = py::none(), py::arg("keep_levels") = false, py::arg("upto") = -1,
          py::arg("progress") = py::none());
 
-  m.def("decompose", [](const DoubleArray& points, py::object normals, int levels, double decimation, double kernel,
-                        int neighbors, double tolerance, int max_iterations, double max_variation, py::object diffusion,
-                        py::object progress) {
-    Points p = to_points(points);
+  m.def("decompose", [](const DoubleArray& points, const DoubleArray& origin, py::object normals, int levels,
+                        double decimation, double kernel, int neighbors, double tolerance, int max_iterations,
+                        double max_variation, py::object diffusion, py::object progress) {
+    Points p = to_points_centred(points, origin);
     Points n;
     const bool has_normals = !normals.is_none();
     if (has_normals) n = to_points(normals.cast<DoubleArray>());
@@ -207,7 +216,7 @@ PYBIND11_MODULE(_core, m) {
       o.diffusion = &dif;
     }
     PythonProgress pp(progress);
-    return without_gil([&] { return decompose(p, has_normals ? &n : nullptr, o, pp.get()); });
+    return without_gil([&] { return decompose(std::move(p), has_normals ? &n : nullptr, o, pp.get()); });
   });
 
   m.def("project", [](const DoubleArray& points, const DoubleArray& onto, double kernel, int neighbors,

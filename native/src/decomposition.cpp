@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "pointscale/cluster_decimation.h"
 #include "pointscale/normal_estimation.h"
@@ -124,7 +125,7 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
 
 }  // namespace
 
-MultiscaleModel decompose(const Points& points, const Points* input_normals, const DecomposeOptions& options,
+MultiscaleModel decompose(Points points, const Points* input_normals, const DecomposeOptions& options,
                           const ProgressCallback* progress) {
   const Eigen::Index n = points.rows();
   const int k = options.levels - 1;
@@ -136,7 +137,7 @@ MultiscaleModel decompose(const Points& points, const Points* input_normals, con
   model.support.resize(k);
   model.reports.resize(k);
   std::vector<Points> levels(k + 1);
-  levels[k] = points;
+  levels[k] = std::move(points);
 
   for (int step = 0; step < k; ++step) {
     const int l = k - step;  // builds level l-1 from level l
@@ -196,7 +197,7 @@ MultiscaleModel decompose(const Points& points, const Points* input_normals, con
   }
   last.report(0.5);
   model.details.resize(k, n);
-  Points reference = reference0;
+  Points reference = std::move(reference0);
   for (int l = 0; l < k; ++l) {
     const LevelSupport& s = model.support[l];
     Points normals = level_normals(levels[l], s, reference);

@@ -49,7 +49,8 @@ struct MultiscaleModel {
 // from them: after the projection P^{l-1} = Psi(P^l), each p^{l-1} is moved within its tangent
 // plane until p^l - p^{l-1} lies exactly along n^{l-1}(P^{l-1}). The move is tiny (the
 // projection is already almost orthogonal) and makes unedited reconstruction exact.
-MultiscaleModel decompose(const Points& points, const Points* input_normals, const DecomposeOptions& options,
+// points is taken by value: it becomes the finest level, so a caller that moves it in saves a copy.
+MultiscaleModel decompose(Points points, const Points* input_normals, const DecomposeOptions& options,
                           const ProgressCallback* progress = nullptr);
 
 }  // namespace pointscale

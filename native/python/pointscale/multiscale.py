@@ -190,7 +190,7 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     if diffusion is not None:
         settings["diffusion"] = dict(zip(("neighbors", "lam", "mu", "iterations"), diffusion))
     _core.set_threads(int(threads))
-    model = _core.decompose(p - origin, n_arr, levels, decimation, kernel, neighbors, tolerance,
+    model = _core.decompose(p, origin, n_arr, levels, decimation, kernel, neighbors, tolerance,
                             max_iterations, max_variation, diffusion, progress)
     return Decomposition(model, origin, settings)
 
