@@ -8,6 +8,7 @@
 #include "pointscale/cluster_decimation.h"
 #include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
+#include "pointscale/release_memory.h"
 #include "pointscale/sample_spacing.h"
 #include "pointscale/spatial_index.h"
 
@@ -33,13 +34,13 @@ struct Consistency {
 // with slope about -d kappa). An anchor that still does not settle is pinned to its finer
 // position (no detail in this band; the coarser bands carry it). Then every other point is made
 // consistent in one step, since its normal no longer depends on it: exact by construction.
+// anchor_reference #C by 3 orients the anchors' normals during the iteration. Writes each
+// point's detail along its unoriented normal (the eigenvector's own sign) to details[0..n).
 Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSupport& support,
-                                const Points& reference, double scale, int max_iterations,
-                                const ProgressStage& stage) {
+                                const Points& anchor_reference, double scale, int max_iterations,
+                                const ProgressStage& stage, double* details) {
   const double stop = 1e-12 * scale;
   const Index c_count = support.clusters;
-  Points anchor_reference(c_count, 3);
-  for (Index c = 0; c < c_count; ++c) anchor_reference.row(c) = reference.row(support.anchors[c]);
   const int k = support.neighbors;
   const double never = std::numeric_limits<double>::infinity();
   std::vector<double> moves(c_count, never), damping(c_count, 1.0), earlier(c_count, never);
@@ -107,16 +108,18 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
     std::fill(moves.begin(), moves.end(), never);
     std::fill(active.begin(), active.end(), 1);
   }
-  const Points normals = level_normals(level, support, reference);
+  // Unoriented: the move below does not depend on the sign, and decompose orients the
+  // normals (and flips these details with them) once level 0 is known.
+  const Points normals = level_normals(level, support, Points());
   std::vector<unsigned char> is_anchor(static_cast<std::size_t>(level.rows()), 0);
   for (Index a : support.anchors) is_anchor[a] = 1;
   parallel_for(static_cast<std::size_t>(level.rows()), [&](std::size_t b, std::size_t e) {
     for (std::size_t ii = b; ii < e; ++ii) {
-      if (is_anchor[ii]) continue;
       const Eigen::Index i = static_cast<Eigen::Index>(ii);
       const Vec3 nrm = normals.row(i).transpose();
       const Vec3 f = fine.row(i).transpose();
-      level.row(i) = (f - (f - level.row(i).transpose()).dot(nrm) * nrm).transpose();
+      if (!is_anchor[ii]) level.row(i) = (f - (f - level.row(i).transpose()).dot(nrm) * nrm).transpose();
+      details[ii] = (fine.row(i) - level.row(i)).dot(normals.row(i));
     }
   });
   stage.report(1.0);
@@ -136,13 +139,16 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   MultiscaleModel model;
   model.support.resize(k);
   model.reports.resize(k);
-  std::vector<Points> levels(k + 1);
-  levels[k] = std::move(points);
+  // Only the level being built and the one it comes from are held; a finished level keeps its
+  // anchors (all its normals need) and its detail along the unoriented normals.
+  Points fine = std::move(points);
+  std::vector<Points> anchors(k);
+  model.details.resize(k, n);
 
   for (int step = 0; step < k; ++step) {
     const int l = k - step;  // builds level l-1 from level l
+    release_free_memory();  // the previous step's temporaries
     const ProgressStage stage = all.sub(static_cast<double>(step) / (k + 0.2), static_cast<double>(step + 1) / (k + 0.2));
-    const Points& fine = levels[l];
     stage.report(0.0);
 
     // Decimate P^l to Q^{l-1}: |Q^{l-1}| = gamma^(step+1) n (Sec. 5.2).
@@ -166,10 +172,18 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     const Points centroids = support_centroids(projected.positions, support);
     support.neighborhoods = knn_graph(SpatialIndex(centroids), support.neighbors);
     attach_frames(centroids, projected.positions, support);
+    Points anchor_reference(support.clusters, 3);
+    for (Index c = 0; c < support.clusters; ++c) anchor_reference.row(c) = projected.normals.row(support.anchors[c]);
+    projected.normals = Points();
 
-    levels[l - 1] = std::move(projected.positions);
-    const Consistency consistency = make_offsets_normal(fine, levels[l - 1], support, projected.normals, scale,
-                                                        options.consistency_iterations, stage.sub(0.8, 1.0));
+    Points coarse = std::move(projected.positions);
+    Eigen::VectorXd band(n);
+    const Consistency consistency = make_offsets_normal(fine, coarse, support, anchor_reference, scale,
+                                                        options.consistency_iterations, stage.sub(0.8, 1.0),
+                                                        band.data());
+    model.details.row(l - 1) = band.transpose();
+    anchors[l - 1] = support_centroids(coarse, support);
+    fine = std::move(coarse);
     LevelReport& report = model.reports[l - 1];
     report.support_points = static_cast<std::size_t>(support.clusters);
     report.kernel_width = median(h);
@@ -180,6 +194,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     report.pinned = consistency.pinned;
   }
 
+  release_free_memory();
   // Orientation: level 0 from the input normals, or by propagation over the level-0 clusters;
   // every finer level agrees with the level below it at the same point (as reconstruction does).
   const ProgressStage last = all.sub(k / (k + 0.2), 1.0);
@@ -188,7 +203,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   if (input_normals) {
     reference0 = *input_normals;
   } else {
-    const Points c0 = support_centroids(levels[0], s0);
+    const Points& c0 = anchors[0];
     std::vector<Index> own(static_cast<std::size_t>(s0.clusters));
     for (Index c = 0; c < s0.clusters; ++c) own[c] = c;
     Points cn = support_normals(c0, own.data(), c0, s0, Points::Zero(s0.clusters, 3));
@@ -196,16 +211,21 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     for (Eigen::Index i = 0; i < n; ++i) reference0.row(i) = cn.row(s0.labels[i]);
   }
   last.report(0.5);
-  model.details.resize(k, n);
+  // Orient each level's normals like support_normals does with a reference (flip where
+  // n . reference < 0), and flip the details with them, so detail x normal is unchanged.
   Points reference = std::move(reference0);
   for (int l = 0; l < k; ++l) {
-    const LevelSupport& s = model.support[l];
-    Points normals = level_normals(levels[l], s, reference);
-    for (Eigen::Index i = 0; i < n; ++i) model.details(l, i) = (levels[l + 1].row(i) - levels[l].row(i)).dot(normals.row(i));
+    Points normals = anchor_normals(anchors[l], model.support[l], Points());
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (normals.row(i).dot(reference.row(i)) < 0.0) {
+        normals.row(i) = -normals.row(i);
+        model.details(l, i) = -model.details(l, i);
+      }
+    }
     if (l == 0) model.base_normals = normals;
     reference = std::move(normals);
   }
-  model.base = std::move(levels[0]);
+  model.base = std::move(fine);
   last.report(1.0);
   return model;
 }

@@ -27,16 +27,21 @@ void choose_anchors(const Points& fine, const Points& level, LevelSupport& suppo
   }
 }
 
-Points support_normals(const Points& query, const Index* query_labels, const Points& centroids,
-                       const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
-  const Eigen::Index n = query.rows();
+namespace {
+
+// support_normals with each query position given by query_at(i), so callers that can compute
+// it on the fly need not hold all of them (#Q by 3 doubles) at once.
+template <class QueryAt>
+Points normals_at(Eigen::Index n, const QueryAt& query_at, const Index* query_labels, const Points& centroids,
+                  const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
   const int k = support.neighbors;
+  const bool has_reference = reference.rows() > 0;
   Points normals(n, 3);
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
     std::vector<double> d2(k), ih2(k), w(k);
     for (std::size_t ii = b; ii < e; ++ii) {
       const Eigen::Index i = static_cast<Eigen::Index>(ii);
-      const Vec3 x = query.row(i).transpose();
+      const Vec3 x = query_at(i);
       const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(query_labels[i]) * k;
       for (int j = 0; j < k; ++j) {
         d2[j] = (centroids.row(nb[j]).transpose() - x).squaredNorm();
@@ -54,13 +59,20 @@ Points support_normals(const Points& query, const Index* query_labels, const Poi
         std::fill(w.begin(), w.end(), 1.0);
         fit = fit_weighted_plane(centroids, nb, w.data(), k, x);
       }
-      const Vec3 ref = reference.row(i).transpose();
       Vec3 nrm = fit.ok ? fit.normal : Vec3(Vec3::UnitZ());
-      if (nrm.dot(ref) < 0.0) nrm = -nrm;
+      if (has_reference && nrm.dot(reference.row(i).transpose()) < 0.0) nrm = -nrm;
       normals.row(i) = nrm.transpose();
     }
   }, stage, 512);
   return normals;
+}
+
+}  // namespace
+
+Points support_normals(const Points& query, const Index* query_labels, const Points& centroids,
+                       const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
+  return normals_at(query.rows(), [&](Eigen::Index i) { return Vec3(query.row(i).transpose()); }, query_labels,
+                    centroids, support, reference, stage);
 }
 
 namespace {
@@ -119,27 +131,35 @@ void attach_frames(const Points& centroids, const Points& positions, LevelSuppor
   }, {}, 4096);
 }
 
-Points frame_positions(const Points& centroids, const LevelSupport& support) {
+namespace {
+
+std::vector<Mat3> cluster_frames(const Points& centroids, const LevelSupport& support) {
   std::vector<Mat3> frames(static_cast<std::size_t>(support.clusters));
   parallel_for(frames.size(), [&](std::size_t b, std::size_t e) {
     for (std::size_t c = b; c < e; ++c) frames[c] = cluster_frame(centroids, support, static_cast<Index>(c));
   }, {}, 4096);
-  Points query(support.local.rows(), 3);
-  parallel_for(static_cast<std::size_t>(query.rows()), [&](std::size_t b, std::size_t e) {
-    for (std::size_t ii = b; ii < e; ++ii) {
-      const Eigen::Index i = static_cast<Eigen::Index>(ii);
-      const Index c = support.labels[i];
-      query.row(i) = centroids.row(c) + (frames[c] * support.local.row(i).transpose()).transpose();
-    }
-  }, {}, 4096);
-  return query;
+  return frames;
 }
+
+// Point i's query position: its cluster's centroid plus its stored offset in the cluster's frame.
+Vec3 frame_position(const Points& centroids, const LevelSupport& support, const std::vector<Mat3>& frames,
+                    Eigen::Index i) {
+  const Index c = support.labels[i];
+  return centroids.row(c).transpose() + frames[c] * support.local.row(i).transpose();
+}
+
+}  // namespace
 
 Points level_normals(const Points& level, const LevelSupport& support, const Points& reference,
                      const ProgressStage& stage) {
-  const Points centroids = support_centroids(level, support);
-  const Points query = frame_positions(centroids, support);
-  return support_normals(query, support.labels.data(), centroids, support, reference, stage);
+  return anchor_normals(support_centroids(level, support), support, reference, stage);
+}
+
+Points anchor_normals(const Points& centroids, const LevelSupport& support, const Points& reference,
+                      const ProgressStage& stage) {
+  const std::vector<Mat3> frames = cluster_frames(centroids, support);
+  return normals_at(support.local.rows(), [&](Eigen::Index i) { return frame_position(centroids, support, frames, i); },
+                    support.labels.data(), centroids, support, reference, stage);
 }
 
 Points transported_references(const Points& original, const Points& edited, const Points& original_normals,

@@ -27,12 +27,14 @@ struct LevelSupport {
 // centroids #C by 3 from support_centroids(positions); positions #P by 3.
 void attach_frames(const Points& centroids, const Points& positions, LevelSupport& support);
 
-// The query position of every point for the given centroids: #P by 3.
-Points frame_positions(const Points& centroids, const LevelSupport& support);
-
 // Normals of a level from its points alone: centroids, then frames, then support_normals.
 Points level_normals(const Points& level, const LevelSupport& support, const Points& reference,
                      const ProgressStage& stage = {});
+
+// The same from the anchors' positions alone (#C by 3, support_centroids of the level): the
+// normals need nothing else, so a finished level can be dropped and its anchors kept.
+Points anchor_normals(const Points& centroids, const LevelSupport& support, const Points& reference,
+                      const ProgressStage& stage = {});
 
 // The anchors' positions in the level. level  #P by 3; returns #C by 3.
 Points support_centroids(const Points& level, const LevelSupport& support);
@@ -46,7 +48,7 @@ void choose_anchors(const Points& fine, const Points& level, LevelSupport& suppo
 // query       #Q by 3 positions
 // query_labels #Q cluster of each query point
 // centroids   #C by 3, from support_centroids
-// reference   #Q by 3 orientation references
+// reference   #Q by 3 orientation references, or empty (0 rows) to keep every eigenvector's sign
 Points support_normals(const Points& query, const Index* query_labels, const Points& centroids,
                        const LevelSupport& support, const Points& reference,
                        const ProgressStage& stage = {});
