@@ -38,8 +38,9 @@ struct SpatialIndex::Impl {
   explicit Impl(const Points& p) : points(p), adaptor{&points} {
     tree = std::make_unique<Tree>(3, adaptor, tree_params());
 #if !defined(NANOFLANN_VERSION) || NANOFLANN_VERSION < 0x150
-    // Before 1.5 the constructor did not build the index.
-    tree->buildIndex();
+    // Some releases before 1.5 build the tree in the constructor (bookworm's 1.4.3 does),
+    // older ones do not; build it only if it is not there, never twice.
+    if (!tree->root_node) tree->buildIndex();
 #endif
   }
 };
