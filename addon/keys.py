@@ -16,6 +16,8 @@ BAND = "Band {}"
 MASK = "Band {} mask"
 EDIT = "Multiscale Edit"
 FILTER = "Multiscale Filter"
+PREVIOUS = " (previous)"  # a re-decompose keeps the last results under this suffix
+OWNED = "pointscale_keys"  # mesh ID property: the key names this add-on created
 BAND_MIN = -1.0  # gain 0
 BAND_MAX = 4.0  # gain 5
 
@@ -44,8 +46,33 @@ def get(mesh, name):
 def ensure_basis(obj):
     if obj.data.shape_keys is None:
         obj.shape_key_add(name="Basis", from_mix=False)
-    obj.data.shape_keys.use_relative = True
+        obj.data.shape_keys.use_relative = True
     return obj.data.shape_keys.reference_key
+
+
+def owned(mesh, old_k: int) -> set:
+    """Key names this add-on created on ``mesh``. Decompositions made before the list was kept
+    own the standard names of their ``old_k`` bands."""
+    if OWNED in mesh.keys():
+        return set(mesh[OWNED])
+    if old_k <= 0:
+        return set()
+    return {level_name(l) for l in range(old_k)} | {band_name(l) for l in range(old_k)} | {EDIT, FILTER}
+
+
+def layout_problem(mesh, k: int, old_k: int) -> str | None:
+    """Why a decompose into k bands cannot write its keys: absolute keys, or a key of the
+    artist's with one of the layout's names (which would be overwritten)."""
+    kbs = key_blocks(mesh)
+    if kbs is None:
+        return None
+    if not mesh.shape_keys.use_relative:
+        return "its shape keys are absolute (Relative is off): turn Relative on, or remove the keys, first"
+    mine = owned(mesh, old_k)
+    for name in [level_name(l) for l in range(k)] + [band_name(l) for l in range(k)]:
+        if name in kbs and name not in mine:
+            return f"it has a shape key '{name}' of its own: rename it first, the decomposition writes that name"
+    return None
 
 
 def ensure_key(obj, name: str, co: np.ndarray, slider=(0.0, 1.0)):
@@ -76,29 +103,60 @@ def ensure_mask(obj, l: int):
     return vg
 
 
-def write_layout(obj, basis: np.ndarray, levels: np.ndarray, old_k: int) -> None:
-    """Level and Band keys and masks for k = len(levels); removes stale ones."""
+def write_layout(obj, basis: np.ndarray, levels: np.ndarray, old_k: int) -> list:
+    """Level and Band keys and masks for k = len(levels). Removes the stale keys this add-on
+    made, keeps the last Multiscale Edit / Filter as "... (previous)", and keeps the active key.
+    Returns the names of the keys it kept that way."""
+    mesh = obj.data
+    mine = owned(mesh, old_k)
+    active = obj.active_shape_key.name if obj.active_shape_key is not None else None
     k = levels.shape[0]
     bands = logic.band_key_data(basis, levels)
+    layout = [level_name(l) for l in range(k)] + [band_name(l) for l in range(k)]
     for l in range(k):
         ensure_key(obj, level_name(l), levels[l]).value = 0.0
     for l in range(k):
         kb = ensure_key(obj, band_name(l), bands[l], slider=(BAND_MIN, BAND_MAX))
         kb.value = 0.0
         kb.vertex_group = ensure_mask(obj, l).name
-    for l in range(k, max(old_k, k) + 16):
-        remove_key(obj, level_name(l))
-        remove_key(obj, band_name(l))
-    remove_key(obj, EDIT)
-    remove_key(obj, FILTER)
+    for name in sorted(mine - set(layout) - {EDIT, FILTER}):
+        remove_key(obj, name)
+    kept = []
+    for name in (EDIT, FILTER):
+        kb = get(mesh, name)
+        if kb is not None and name in mine:
+            remove_key(obj, name + PREVIOUS)
+            kb.name = name + PREVIOUS
+            kept.append(kb.name)
+    mesh[OWNED] = layout
+    _restore_active(obj, active)
+    return kept
 
 
 def remove_layout(obj, k: int) -> None:
-    for l in range(k + 16):
-        remove_key(obj, level_name(l))
-        remove_key(obj, band_name(l))
-    remove_key(obj, EDIT)
-    remove_key(obj, FILTER)
+    mesh = obj.data
+    active = obj.active_shape_key.name if obj.active_shape_key is not None else None
+    for name in sorted(owned(mesh, k)):
+        remove_key(obj, name)
+    if OWNED in mesh.keys():
+        del mesh[OWNED]
+    _restore_active(obj, active)
+
+
+def add_owned(mesh, name: str) -> None:
+    """Records a key made after the decompose (Multiscale Edit / Filter) as the add-on's."""
+    names = list(mesh[OWNED]) if OWNED in mesh.keys() else []
+    if name not in names:
+        mesh[OWNED] = names + [name]
+
+
+def _restore_active(obj, name) -> None:
+    # Removing keys shifts the active index; keep the artist on the key they had, or the Basis.
+    kbs = key_blocks(obj.data)
+    if kbs is None:
+        return
+    i = kbs.find(name) if name else -1
+    obj.active_shape_key_index = max(i, 0)
 
 
 def set_scale(mesh, t: float, k: int) -> None:

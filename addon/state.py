@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from . import engine, storage
+from . import engine, keys, storage
 
 
 def mesh_object_problem(obj) -> str | None:
@@ -38,4 +38,18 @@ def decomposed_problem(obj) -> str | None:
         )
     if mesh.shape_keys is None or mesh.shape_keys.reference_key is None:
         return f"'{obj.name}' lost its shape keys: Decompose again"
+    k = mesh.multiscale.n_bands
+    kbs = mesh.shape_keys.key_blocks
+    for name in [keys.level_name(l) for l in range(k)] + [keys.band_name(l) for l in range(k)]:
+        if name not in kbs:
+            return f"'{obj.name}' has no shape key '{name}' any more (removed or renamed): Decompose again"
+    return None
+
+
+def vertex_order_problem(obj) -> str | None:
+    """Checked when an operator runs (it reads every vertex, too slow for poll): vertices
+    reordered since the decompose, e.g. by Sort Mesh Elements, keep their count but not their data."""
+    if not storage.order_intact(obj.data):
+        return (f"the vertices of '{obj.name}' were reordered since it was decomposed: "
+                "Decompose again (or Clear) to start over; nothing was modified")
     return None

@@ -19,6 +19,7 @@ HIDDEN = ".ps."
 DETAIL = "ms_detail_"
 NORMAL = "ms_normal_"
 COLOR = "ms_detail_color"
+ORDER = HIDDEN + "order"
 FORMAT = 1
 
 
@@ -37,6 +38,8 @@ def store(mesh, dec, details=None, normals=None) -> None:
     clear(mesh)
     for name, (kind, values) in columns.items():
         mesh_io.write_attribute(mesh, HIDDEN + name, kind, values)
+    # Vertex indices as data: Blender reorders attributes with the vertices, so a sort shows here.
+    mesh_io.write_attribute(mesh, ORDER, "INT", np.arange(n, dtype=np.int32))
     k = dec.n_bands
     details = dec.details if details is None else details
     for l in range(k):
@@ -81,7 +84,19 @@ def load(mesh, engine):
     return engine.Decomposition.from_dict(arrays)
 
 
+def order_intact(mesh) -> bool:
+    """False when the vertices were reordered after the decompose (True for older data without
+    the order column)."""
+    if mesh.attributes.get(ORDER) is None:
+        return True
+    order = mesh_io.read_attribute(mesh, ORDER, "INT")
+    return bool(np.array_equal(order, np.arange(len(order), dtype=order.dtype)))
+
+
 def read_details(mesh, band: int) -> np.ndarray:
+    """The band's detail coefficients (the visible attribute); ValueError if it was removed."""
+    if mesh.attributes.get(f"{DETAIL}{band}") is None:
+        raise ValueError(f"the attribute {DETAIL}{band} was removed: Decompose again to restore it")
     return mesh_io.read_attribute(mesh, f"{DETAIL}{band}", "FLOAT")
 
 

@@ -11,8 +11,9 @@ from . import keys, mesh_io, storage
 _cache: dict = {}
 
 
-def apply_layout(obj, layout) -> None:
-    """Keys, masks, attributes and settings of a fresh decomposition (object mode)."""
+def apply_layout(obj, layout) -> list:
+    """Keys, masks, attributes and settings of a fresh decomposition (object mode). Returns the
+    earlier result keys it kept under a "(previous)" name."""
     mesh = obj.data
     settings = mesh.multiscale
     basis = mesh_io.read_basis(mesh).astype(np.float64)
@@ -21,7 +22,7 @@ def apply_layout(obj, layout) -> None:
     except Exception:
         storage.clear(mesh)  # never leave half-written data
         raise
-    keys.write_layout(obj, basis, layout.levels, settings.n_bands)
+    kept = keys.write_layout(obj, basis, layout.levels, settings.n_bands)
     token = uuid.uuid4().hex
     mesh[storage.PROP]["token"] = token
     _remember(mesh, token, layout.dec)
@@ -34,6 +35,7 @@ def apply_layout(obj, layout) -> None:
     settings.detail_band = min(settings.detail_band, k - 1)
     settings.scale = float(k)  # show the original
     mesh.update()
+    return kept
 
 
 def clear(obj) -> None:
@@ -74,6 +76,7 @@ def show_result(obj, name: str, co: np.ndarray) -> None:
     """Write an absolute result key and show it alone over the original (Scale = k)."""
     mesh = obj.data
     kb = keys.ensure_key(obj, name, co)
+    keys.add_owned(mesh, name)
     kb.value = 1.0
     for other in (keys.EDIT, keys.FILTER):
         if other != name:

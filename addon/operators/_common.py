@@ -25,6 +25,8 @@ class DecomposedOperator:
         if problem is None and obj.mode == "EDIT":
             obj.update_from_editmode()  # read the edit without leaving edit mode yet
             problem = state.decomposed_problem(obj)
+        if problem is None:
+            problem = state.vertex_order_problem(obj)
         if problem:
             self.report({"ERROR"}, problem)
             return None

@@ -27,8 +27,11 @@ class POINTSCALE_OT_paint_band_mask(DecomposedOperator, bpy.types.Operator):
         if self.band >= k:
             self.report({"ERROR"}, f"band {self.band} does not exist: '{obj.name}' has bands 0..{k - 1}")
             return {"CANCELLED"}
-        vg = keys.ensure_mask(obj, self.band)
         kb = keys.get(obj.data, keys.band_name(self.band))
+        if kb is None:
+            self.report({"ERROR"}, f"'{obj.name}' has no key '{keys.band_name(self.band)}': Decompose again")
+            return {"CANCELLED"}
+        vg = keys.ensure_mask(obj, self.band)
         kb.vertex_group = vg.name
         obj.vertex_groups.active_index = vg.index
         if self.enter_paint and not bpy.app.background:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import bpy
 
-from .. import compute, engine, mesh_io, preferences, state, writeback
+from .. import compute, engine, keys, mesh_io, preferences, state, writeback
 from ..job import Job
 
 
@@ -30,7 +30,7 @@ def _prepare(op, context):
     """Read the input on the main thread: (points, kwargs) or None after a report."""
     obj = context.active_object
     if obj.mode == "EDIT":
-        bpy.ops.object.mode_set(mode="OBJECT")
+        obj.update_from_editmode()  # read the edit; the mode changes only when results are written
     mesh = obj.data
     points = mesh_io.read_basis(mesh)
     s = mesh.multiscale
@@ -39,7 +39,7 @@ def _prepare(op, context):
         kwargs = compute.decompose_kwargs(
             ps, s.levels, s.decimation, s.kernel, s.neighbors, preferences.get(context).threads, s.smoother, s.encoding
         )
-        problem = compute.logic.check_points(points)
+        problem = compute.logic.check_points(points) or keys.layout_problem(mesh, s.levels - 1, s.n_bands)
         if problem:
             raise ValueError(problem)
     except ValueError as exc:
@@ -84,10 +84,13 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         if obj.type != "MESH" or len(obj.data.vertices) != n:
             self.report({"ERROR"}, f"'{obj.name}' changed while it was being decomposed; nothing was written")
             return {"CANCELLED"}
-        if obj.mode == "EDIT":
+        if obj.mode != "OBJECT":
+            # Edit, Sculpt or Weight Paint on a key that is about to change: leave it first.
             bpy.ops.object.mode_set(mode="OBJECT")
-        writeback.apply_layout(obj, layout)
+        kept = writeback.apply_layout(obj, layout)
         k = layout.k
+        if kept:
+            self.report({"INFO"}, f"Decompose '{obj.name}': the earlier results are kept as {', '.join(kept)}")
         for message in layout.warnings:
             self.report({"WARNING"}, f"Decompose '{obj.name}': {message}")
         self.report({"INFO"}, f"Decomposed '{obj.name}': {n} vertices, {k + 1} levels, {k} bands")

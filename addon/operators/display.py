@@ -43,7 +43,11 @@ class POINTSCALE_OT_show_details(DecomposedOperator, bpy.types.Operator):
         if self.band >= k:
             self.report({"ERROR"}, f"band {self.band} does not exist: '{obj.name}' has bands 0..{k - 1}")
             return {"CANCELLED"}
-        d = storage.read_details(mesh, self.band)
+        try:
+            d = storage.read_details(mesh, self.band)
+        except ValueError as exc:
+            self.report({"ERROR"}, f"Show Details on '{obj.name}': {exc}")
+            return {"CANCELLED"}
         rgba = logic.detail_colors(d, self.scale or None)
         mesh_io.write_attribute(mesh, storage.COLOR, "FLOAT_COLOR", rgba)
         attr = mesh.color_attributes.get(storage.COLOR)

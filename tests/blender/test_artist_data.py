@@ -1,0 +1,122 @@
+"""The artist's own data survives: their shape keys, earlier results, the active key and the
+vertex order are respected, and a damaged layout is refused with a message, not a traceback."""
+
+import bmesh
+import bpy
+import numpy as np
+import pytest
+
+import blender_helpers as h
+
+pytestmark = pytest.mark.blender
+
+
+def test_own_keys_with_layout_like_names_survive_decompose_and_clear():
+    obj = h.mesh_object(h.noisy_sphere(4000), name="Own")
+    obj.shape_key_add(name="Basis")
+    mine = {"Level 5": 0.1, "Band 7": 0.2}
+    for name, dz in mine.items():
+        obj.shape_key_add(name=name)
+        h.set_key(obj.data, name, h.key(obj.data, "Basis") + [0, 0, dz])
+    h.decompose(obj, levels=4)
+    h.decompose(obj, levels=3)  # fewer bands: the stale Level 2 / Band 2 go, the artist's stay
+    kbs = obj.data.shape_keys.key_blocks
+    assert "Level 2" not in kbs and "Band 2" not in kbs
+    assert bpy.ops.pointscale.clear() == {"FINISHED"}
+    kbs = obj.data.shape_keys.key_blocks
+    assert "Level 0" not in kbs and "Band 0" not in kbs
+    for name, dz in mine.items():
+        assert np.allclose(h.key(obj.data, name) - h.key(obj.data, "Basis"), [0, 0, dz], atol=1e-6), name
+
+
+def test_a_key_of_the_artist_with_a_layout_name_is_refused():
+    obj = h.mesh_object(h.noisy_sphere(4000), name="Clash")
+    obj.shape_key_add(name="Basis")
+    obj.shape_key_add(name="Level 0")
+    before = h.snapshot(obj)
+    with pytest.raises(RuntimeError, match="'Level 0' of its own"):
+        bpy.ops.pointscale.decompose()
+    assert h.same(before, h.snapshot(obj))
+
+
+def test_absolute_shape_keys_are_refused_not_switched():
+    obj = h.mesh_object(h.noisy_sphere(4000), name="Absolute")
+    obj.shape_key_add(name="Basis")
+    obj.shape_key_add(name="Key 1")
+    obj.data.shape_keys.use_relative = False
+    before = h.snapshot(obj)
+    with pytest.raises(RuntimeError, match="absolute"):
+        bpy.ops.pointscale.decompose()
+    assert obj.data.shape_keys.use_relative is False
+    assert h.same(before, h.snapshot(obj))
+
+
+def test_decompose_again_keeps_the_earlier_result_and_the_active_key():
+    obj = h.mesh_object(h.noisy_sphere(4000), name="Again")
+    h.decompose(obj)
+    me = obj.data
+    h.set_key(me, "Level 0", h.key(me, "Level 0") * 1.1)
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    edit = h.key(me, "Multiscale Edit").copy()
+    obj.active_shape_key_index = me.shape_keys.key_blocks.find("Band 1")
+    h.decompose(obj, levels=3)
+    assert np.array_equal(h.key(me, "Multiscale Edit (previous)"), edit)
+    assert "Multiscale Edit" not in me.shape_keys.key_blocks
+    assert obj.active_shape_key.name == "Band 1"
+    # ... and one more decompose replaces that "(previous)" rather than piling up copies
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    h.decompose(obj, levels=3)
+    assert sum(kb.name.startswith("Multiscale Edit") for kb in me.shape_keys.key_blocks) == 1
+
+
+def test_a_removed_layout_key_is_refused_with_a_message():
+    obj = h.mesh_object(h.noisy_sphere(4000), name="Removed")
+    h.decompose(obj)
+    obj.shape_key_remove(obj.data.shape_keys.key_blocks["Level 0"])
+    before = h.snapshot(obj)
+    for op, kw in [("rebuild_detail", {}), ("bake_filter", {}), ("edit_base", {"mode": "OBJECT"}),
+                   ("paint_band_mask", {"band": 0, "enter_paint": False})]:
+        assert not getattr(bpy.ops.pointscale, op).poll(), op
+        with pytest.raises(RuntimeError, match="no shape key 'Level 0'"):
+            getattr(bpy.ops.pointscale, op)(**kw)
+        assert h.same(before, h.snapshot(obj)), op
+    assert bpy.ops.pointscale.decompose() == {"FINISHED"}  # the way out
+    assert bpy.ops.pointscale.rebuild_detail.poll()
+
+
+def test_reordered_vertices_are_refused():
+    obj = h.mesh_object(h.noisy_sphere(4000), name="Sorted")
+    h.decompose(obj)
+    me = obj.data
+    bm = bmesh.new()
+    bm.from_mesh(me)
+    bm.verts.ensure_lookup_table()
+    order = np.random.default_rng(0).permutation(len(bm.verts))
+    for v, i in zip(bm.verts, order):
+        v.index = int(i)
+    bm.verts.sort()
+    bm.to_mesh(me)
+    bm.free()
+    me.update()
+    assert len(me.vertices) == 4000
+    before = h.snapshot(obj)
+    with pytest.raises(RuntimeError, match="reordered"):
+        bpy.ops.pointscale.rebuild_detail()
+    assert h.same(before, h.snapshot(obj))
+
+
+def test_show_details_without_its_attribute_reports():
+    obj = h.mesh_object(h.noisy_sphere(4000), name="NoAttr")
+    h.decompose(obj)
+    obj.data.attributes.remove(obj.data.attributes["ms_detail_0"])
+    with pytest.raises(RuntimeError, match="ms_detail_0 was removed"):
+        bpy.ops.pointscale.show_details(band=0)
+
+
+def test_a_refused_decompose_leaves_edit_mode_alone():
+    obj = h.mesh_object([(0, 0, 0), (1, 0, 0), (0, 1, 0)], faces=[(0, 1, 2)], name="Tiny")
+    bpy.ops.object.mode_set(mode="EDIT")
+    with pytest.raises(RuntimeError, match="3 vertices"):
+        bpy.ops.pointscale.decompose()
+    assert obj.mode == "EDIT"
+    bpy.ops.object.mode_set(mode="OBJECT")
