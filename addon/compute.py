@@ -7,7 +7,6 @@ bpy scripts can call them directly; they are safe to run in a worker thread.
 from __future__ import annotations
 
 import inspect
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,13 +68,15 @@ def decompose(ps, points: np.ndarray, progress=None, smoother="MLS", encoding="P
     if problem:
         raise ValueError(problem)
     fn, extra = decompose_function(ps, smoother, encoding)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        dec = fn(np.asarray(points, dtype=np.float64), progress=progress, **kwargs, **extra)
+    # The engine's warning as data: catching warnings is not thread-safe, and this runs on a
+    # worker thread while the UI (and other jobs) go on.
+    check = getattr(ps, "coarse_base_warning", None)
+    message = check(len(points), kwargs.get("levels", 4), kwargs.get("decimation", 0.25)) if check else None
+    dec = fn(np.asarray(points, dtype=np.float64), progress=progress, **kwargs, **extra)
     k = dec.n_bands
     levels = np.stack([dec.level(l) for l in range(k)])
     normals = np.stack([dec.normals(l) for l in range(k)])
-    return Layout(dec, levels, normals, tuple(str(w.message) for w in caught))
+    return Layout(dec, levels, normals, (message,) if message else ())
 
 
 def rebuild(ps, dec, base: np.ndarray, gains=None) -> np.ndarray:

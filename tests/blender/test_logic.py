@@ -97,3 +97,23 @@ def test_check_points(logic):
     p = np.zeros((10, 3)); p[4, 1] = np.inf
     assert "NaN" in logic.check_points(p) and "index 4" in logic.check_points(p)
     assert "shape" in logic.check_points(np.zeros((10, 2)))
+
+
+def test_decompose_warnings_come_from_the_job_not_from_other_threads(addon):
+    import threading
+    import warnings
+
+    import pointscale as ps
+
+    compute = importlib.import_module(f"{ADDON_NAME}.compute")
+    points = ps.shapes.bumpy_sphere(3000)
+    result = {}
+    worker = threading.Thread(target=lambda: result.setdefault("layout", compute.decompose(ps, points, levels=4)))
+    worker.start()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        while worker.is_alive():
+            warnings.warn("main-thread noise")  # must not end up in the job's report
+    worker.join()
+    layout_warnings = result["layout"].warnings
+    assert len(layout_warnings) == 1 and "support points at level 0" in layout_warnings[0]

@@ -119,6 +119,17 @@ def _level_index(l, count: int) -> int:
     return int(l)
 
 
+def coarse_base_warning(n: int, levels: int = 4, decimation: float = 0.25) -> str | None:
+    """The warning `decompose` gives when level 0 would keep too few support points, or None.
+    Callers that run decompose on a worker thread can show it without catching warnings."""
+    coarse = int(np.floor(decimation ** (levels - 1) * n))
+    if coarse >= FEW_COARSE_POINTS:
+        return None
+    return (f"levels={levels} and decimation={decimation} leave {coarse} support points at level 0 of {n}; "
+            f"a base this coarse can be distorted. Use fewer levels or a larger decimation "
+            f"(at least {FEW_COARSE_POINTS} is safe).")
+
+
 def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: float = 1.0, normals=None,
               neighbors: int = 24, tolerance: float = 1e-7, max_iterations: int = 30,
               max_variation: float = 0.05, smoother: str = "mls", encoding: str = "projection",
@@ -172,11 +183,9 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
                          f"(the coarsest level keeps decimation**(levels-1) of them and needs {MIN_COARSE_POINTS}); "
                          f"got {len(p)}")
     require_surface(p)
-    coarse = int(np.floor(decimation ** (levels - 1) * len(p)))
-    if coarse < FEW_COARSE_POINTS:
-        warnings.warn(f"levels={levels} and decimation={decimation} leave {coarse} support points at level 0 of "
-                      f"{len(p)}; a base this coarse can be distorted. Use fewer levels or a larger decimation "
-                      f"(at least {FEW_COARSE_POINTS} is safe).", stacklevel=2)
+    message = coarse_base_warning(len(p), levels, decimation)
+    if message:
+        warnings.warn(message, stacklevel=2)
     n_arr = None
     if normals is not None:
         n_arr = as_points(normals, "normals")
