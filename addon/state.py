@@ -15,6 +15,16 @@ def mesh_object_problem(obj) -> str | None:
     return None
 
 
+# session_uid of every object with a decompose in flight: other operators wait for it.
+running: set = set()
+
+
+def running_problem(obj) -> str | None:
+    if obj is not None and obj.session_uid in running:
+        return f"'{obj.name}' is being decomposed (Esc cancels): wait for it to finish"
+    return None
+
+
 def engine_problem() -> str | None:
     if not engine.available():
         return engine.error() or "the pointscale engine is not available"
@@ -23,7 +33,7 @@ def engine_problem() -> str | None:
 
 def decomposed_problem(obj) -> str | None:
     """None when ``obj`` holds a decomposition that matches its current topology."""
-    problem = mesh_object_problem(obj)
+    problem = mesh_object_problem(obj) or running_problem(obj)
     if problem:
         return problem
     mesh = obj.data

@@ -11,12 +11,13 @@ from . import keys, mesh_io, storage
 _cache: dict = {}
 
 
-def apply_layout(obj, layout) -> list:
+def apply_layout(obj, layout, basis=None) -> list:
     """Keys, masks, attributes and settings of a fresh decomposition (object mode). Returns the
     earlier result keys it kept under a "(previous)" name."""
     mesh = obj.data
     settings = mesh.multiscale
-    basis = mesh_io.read_basis(mesh).astype(np.float64)
+    # The Basis the decomposition was computed from (the caller's snapshot), else the current one.
+    basis = (mesh_io.read_basis(mesh) if basis is None else np.asarray(basis)).astype(np.float64)
     try:
         storage.store(mesh, layout.dec, normals=layout.normals)
     except Exception:

@@ -10,7 +10,8 @@ from ._common import DecomposedOperator
 
 class POINTSCALE_OT_paint_band_mask(DecomposedOperator, bpy.types.Operator):
     """Create or activate the band's mask vertex group ('Band l mask') and enter Weight Paint:
-    weight 0 keeps the original there, 1 applies the band's gain fully"""
+    weight 0 keeps the original there, 1 applies the band's gain fully. A new mask starts at 1
+    everywhere, so paint with a lower weight (or Subtract) where the gain should fade out"""
 
     bl_idname = "pointscale.paint_band_mask"
     bl_label = "Paint Band Mask"

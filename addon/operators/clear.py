@@ -18,7 +18,7 @@ class POINTSCALE_OT_clear(bpy.types.Operator):
     @classmethod
     def poll(cls, context):
         obj = context.active_object
-        problem = state.mesh_object_problem(obj)
+        problem = state.mesh_object_problem(obj) or state.running_problem(obj)
         if problem is None and not storage.has_data(obj.data) and obj.data.multiscale.n_bands == 0:
             problem = f"'{obj.name}' has no multiscale data"
         if problem:

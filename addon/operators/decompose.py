@@ -15,14 +15,11 @@ from .. import compute, engine, keys, mesh_io, preferences, state, writeback
 from ..job import Job
 
 
-_running: set = set()  # names of objects with a decompose in flight
-
-
 def _problem(context):
     obj = context.active_object
     problem = state.mesh_object_problem(obj) or state.engine_problem()
-    if problem is None and obj.name in _running:
-        problem = f"'{obj.name}' is being decomposed already (Esc cancels)"
+    if problem is None:
+        problem = state.running_problem(obj)
     return problem
 
 
@@ -78,16 +75,17 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         except ValueError as exc:
             self.report({"ERROR"}, f"Decompose '{obj.name}': {exc}")
             return {"CANCELLED"}
-        return self._finish(context, obj, layout, len(points))
+        return self._finish(context, obj, layout, points)
 
-    def _finish(self, context, obj, layout, n):
+    def _finish(self, context, obj, layout, points):
+        n = len(points)
         if obj.type != "MESH" or len(obj.data.vertices) != n:
             self.report({"ERROR"}, f"'{obj.name}' changed while it was being decomposed; nothing was written")
             return {"CANCELLED"}
         if obj.mode != "OBJECT":
             # Edit, Sculpt or Weight Paint on a key that is about to change: leave it first.
             bpy.ops.object.mode_set(mode="OBJECT")
-        kept = writeback.apply_layout(obj, layout)
+        kept = writeback.apply_layout(obj, layout, basis=points)  # the Basis the engine saw
         k = layout.k
         if kept:
             self.report({"INFO"}, f"Decompose '{obj.name}': the earlier results are kept as {', '.join(kept)}")
@@ -105,6 +103,8 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
             return {"CANCELLED"}
         points, kwargs = prepared
         self._obj_name = context.active_object.name
+        self._obj_uid = context.active_object.session_uid  # names can change during the job
+        self._points = points
         self._n = len(points)
         ps = engine.get()
         self._job = Job(
@@ -116,7 +116,7 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         self._timer = wm.event_timer_add(preferences.get(context).poll_interval, window=context.window)
         wm.modal_handler_add(self)
         wm.progress_begin(0, 100)
-        _running.add(self._obj_name)
+        state.running.add(self._obj_uid)
         self._job.start()
         self._status(context)
         return {"RUNNING_MODAL"}
@@ -140,11 +140,11 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         if job.error is not None:
             self.report({"ERROR"}, f"Decompose '{self._obj_name}': {job.error}")
             return {"CANCELLED"}
-        obj = bpy.data.objects.get(self._obj_name)
+        obj = next((o for o in bpy.data.objects if o.session_uid == self._obj_uid), None)
         if obj is None:
             self.report({"ERROR"}, f"'{self._obj_name}' disappeared while it was being decomposed")
             return {"CANCELLED"}
-        return self._finish(context, obj, job.result, self._n)
+        return self._finish(context, obj, job.result, self._points)
 
     def cancel(self, context):
         # Blender ends the modal itself (file load, quit): stop the worker, drop the result.
@@ -163,7 +163,7 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
             context.area.tag_redraw()
 
     def _cleanup(self, context):
-        _running.discard(self._obj_name)
+        state.running.discard(self._obj_uid)
         wm = context.window_manager
         if getattr(self, "_timer", None) is not None:
             wm.event_timer_remove(self._timer)

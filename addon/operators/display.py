@@ -9,16 +9,23 @@ from ._common import DecomposedOperator
 
 
 def _show_attribute_colors(context):
-    screen = context.screen
-    if screen is None:
+    """Attribute colours in the 3D view the button was pressed in (or every 3D view when run
+    from elsewhere, e.g. a script); other views keep their shading."""
+    space = context.space_data
+    if space is not None and space.type == "VIEW_3D":
+        spaces = [space]
+    elif context.screen is not None:
+        spaces = [a.spaces.active for a in context.screen.areas if a.type == "VIEW_3D"]
+    else:
         return
-    for area in screen.areas:
-        if area.type == "VIEW_3D":
-            shading = area.spaces.active.shading
-            if shading.type not in {"SOLID"}:
-                shading.type = "SOLID"
-            shading.color_type = "VERTEX"  # shown as "Attribute" in the UI
-            area.tag_redraw()
+    for sp in spaces:
+        if sp.shading.type != "SOLID":
+            sp.shading.type = "SOLID"
+        sp.shading.color_type = "VERTEX"  # shown as "Attribute" in the UI
+    if context.screen is not None:
+        for area in context.screen.areas:
+            if area.type == "VIEW_3D":
+                area.tag_redraw()
 
 
 class POINTSCALE_OT_show_details(DecomposedOperator, bpy.types.Operator):

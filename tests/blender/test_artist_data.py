@@ -120,3 +120,20 @@ def test_a_refused_decompose_leaves_edit_mode_alone():
         bpy.ops.pointscale.decompose()
     assert obj.mode == "EDIT"
     bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def test_nothing_else_runs_on_an_object_while_it_is_being_decomposed(addon):
+    import importlib
+
+    state = importlib.import_module(h.ADDON_NAME + ".state")
+    obj = h.mesh_object(h.noisy_sphere(4000), name="Busy")
+    h.decompose(obj)
+    state.running.add(obj.session_uid)  # what the modal Decompose does while its worker runs
+    try:
+        for op in ("decompose", "rebuild_detail", "bake_filter", "edit_base", "clear", "reset_bands"):
+            assert not getattr(bpy.ops.pointscale, op).poll(), op
+        with pytest.raises(RuntimeError, match="being decomposed"):
+            bpy.ops.pointscale.rebuild_detail()
+    finally:
+        state.running.discard(obj.session_uid)
+    assert bpy.ops.pointscale.rebuild_detail.poll()
