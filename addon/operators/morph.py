@@ -76,8 +76,14 @@ class POINTSCALE_OT_morph(bpy.types.Operator):
             obj.shape_key_clear()
         for name in [a.name for a in mesh.attributes if a.name.startswith((".ps.", "ms_"))]:
             mesh.attributes.remove(mesh.attributes[name])
-        if "pointscale" in mesh.keys():
-            del mesh["pointscale"]
+        for prop in ("pointscale", keys.OWNED):
+            if prop in mesh.keys():
+                del mesh[prop]
+        # The copy carries A's vertex groups (stored on the mesh) and morph settings: drop the
+        # band masks and the target, which belong to A's decomposition.
+        for vg in [g for g in obj.vertex_groups if g.name.startswith("Band ") and g.name.endswith(" mask")]:
+            obj.vertex_groups.remove(vg)
+        mesh.multiscale.morph_target = None
         mesh.multiscale.n_bands = 0
         mesh.multiscale.n_vertices = 0
         mesh.multiscale.bands.clear()

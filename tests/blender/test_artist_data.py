@@ -137,3 +137,22 @@ def test_nothing_else_runs_on_an_object_while_it_is_being_decomposed(addon):
     finally:
         state.running.discard(obj.session_uid)
     assert bpy.ops.pointscale.rebuild_detail.poll()
+
+
+def test_a_morph_of_a_decomposed_object_carries_none_of_its_decomposition():
+    import pointscale as ps
+
+    a = ps.shapes.bumpy_sphere(3000, coarse=0.05, fine=0.0)
+    b = ps.shapes.bumpy_sphere(2200, coarse=0.08, coarse_frequency=5.0, fine=0.0, seed=1)
+    A = h.mesh_object(a, name="A")
+    h.decompose(A, levels=3)
+    B = h.mesh_object(b, name="B")
+    bpy.context.view_layer.objects.active = A
+    A.data.multiscale.morph_target = B
+    assert bpy.ops.pointscale.morph() == {"FINISHED"}
+    M = bpy.context.active_object
+    assert M is not A
+    assert not [g.name for g in M.vertex_groups if g.name.endswith(" mask")]
+    assert "pointscale" not in M.data.keys() and "pointscale_keys" not in M.data.keys()
+    assert M.data.multiscale.morph_target is None and M.data.multiscale.n_bands == 0
+    assert [g.name for g in A.vertex_groups] == ["Band 0 mask", "Band 1 mask"]  # A keeps its own
