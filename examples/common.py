@@ -70,6 +70,29 @@ def read_model(path):
     return m.points, faces
 
 
+# Which way each scan faces once its +y is turned up: every figure shows it from the front.
+FRONT = {"max_planck.ply": "-z", "igea.ply": "z", "bunny.ply": "z", "happy_buddha_scans.ply": "z"}
+
+
+def scan(name: str):
+    """(points, faces) of a scan from the data folder, upright, facing -y, its bounding box
+    centred with largest side 2; exits as "skipped" when the scan is absent."""
+    (path,) = need_models(name)
+    points, faces = read_model(path)
+    points, _, _ = normalise(align_up(points, up="y", front=FRONT[name]))
+    return points, faces
+
+
+def addon_decompose(studio, points, faces, name: str, levels: int = 4):
+    """A mesh object decomposed by the add-on's own Decompose operator, as an artist would."""
+    load_addon()
+    obj = studio.mesh(points, faces, name)
+    make_active(obj)
+    obj.data.multiscale.levels = levels
+    assert bpy.ops.pointscale.decompose() == {"FINISHED"}
+    return obj
+
+
 def log(msg: str) -> None:
     print(f"  [{time.perf_counter() - _T0:6.1f} s] {msg}", flush=True)
 

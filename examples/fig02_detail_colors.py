@@ -14,17 +14,10 @@ import common as C
 
 def main(argv=None):
     args = C.parse_args(__doc__, argv)
-    (path,) = C.need_models("max_planck.ply")
-    points, faces = C.read_model(path)
-    points = C.align_up(points, up="y", front="-z")
-    points, _, _ = C.normalise(points)
+    points, faces = C.scan("max_planck.ply")
     st = C.Studio(args.quick, 200, 250)
-    C.load_addon()
-    obj = st.mesh(points, faces, "Max Planck")
-    C.make_active(obj)
+    obj = C.addon_decompose(st, points, faces, "Max Planck", levels=4)
     settings = obj.data.multiscale
-    settings.levels = 4
-    assert bpy.ops.pointscale.decompose() == {"FINISHED"}
     k = settings.n_bands
     C.log(f"add-on Decompose: {k} bands on {len(points)} vertices")
     clay = obj.data.materials[0]

@@ -13,10 +13,7 @@ TS = [1.0, 1.25, 1.5, 1.75, 2.0]
 
 def main(argv=None):
     args = C.parse_args(__doc__, argv)
-    (path,) = C.need_models("bunny.ply")
-    points, faces = C.read_model(path)
-    points = C.align_up(points, up="y", front="z")
-    points, _, _ = C.normalise(points)
+    points, faces = C.scan("bunny.ply")
     C.log(f"bunny: {len(points)} points")
     dec = ps.decompose(points, levels=4)
     C.log(f"decomposed, support points {[s['support_points'] for s in dec.stats]}")

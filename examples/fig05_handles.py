@@ -17,21 +17,6 @@ def bump(xy):
     return HEIGHT * np.exp(-(xy ** 2).sum(axis=1) / WIDTH ** 2)
 
 
-def handle_angles(result, points, handle, centres, surface):
-    """Angle in degrees between each handle's axis (bottom ring to top face, on `result`) and the
-    normal of a plane fitted to the surface points around it (on `surface`); as in
-    tests/test_deformation.py."""
-    angles = []
-    for h, (cx, cy) in enumerate(centres):
-        mine = handle == h
-        top = mine & (points[:, 2] > points[mine, 2].max() - 1e-9)
-        low = mine & (points[:, 2] < 0.03)
-        axis = result[top].mean(axis=0) - result[low].mean(axis=0)
-        r = np.hypot(points[:, 0] - cx, points[:, 1] - cy)
-        ring = surface[(handle == -1) & (r > 0.15) & (r < 0.4)]
-        normal = np.linalg.svd(ring - ring.mean(axis=0), full_matrices=False)[2][2]
-        angles.append(np.degrees(np.arccos(abs(axis @ normal) / np.linalg.norm(axis))))
-    return np.array(angles)
 
 
 def main(argv=None):
@@ -45,8 +30,8 @@ def main(argv=None):
     single = points.copy()
     single[:, 2] += bump(points[:, :2])
     multi = ps.reconstruct(dec, base=lifted)
-    a_single = handle_angles(single, points, handle, centres, single)
-    a_multi = handle_angles(multi, points, handle, centres, lifted)
+    a_single = ps.shapes.handle_angles(single, points, handle, centres, single)
+    a_multi = ps.shapes.handle_angles(multi, points, handle, centres, lifted)
     numbers = {
         "points": len(points),
         "base_height_range": float(np.ptp(base[:, 2])),

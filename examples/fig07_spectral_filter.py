@@ -13,10 +13,7 @@ GAINS = [(2, 2, 1), (1, 1, 2), (1, 1, 3), (0, 0, 1)]
 
 def main(argv=None):
     args = C.parse_args(__doc__, argv)
-    (path,) = C.need_models("max_planck.ply")
-    points, faces = C.read_model(path)
-    points = C.align_up(points, up="y", front="-z")
-    points, _, _ = C.normalise(points)
+    points, faces = C.scan("max_planck.ply")
     C.log(f"max_planck: {len(points)} points")
     dec = ps.decompose(points, levels=4)
     C.log(f"decomposed into {dec.n_levels} levels, support points per level "

@@ -15,10 +15,7 @@ GAINS = [0.0, 0.5, 1.0, 1.5, 2.0]
 
 def main(argv=None):
     args = C.parse_args(__doc__, argv)
-    (path,) = C.need_models("max_planck.ply")
-    points, faces = C.read_model(path)
-    points = C.align_up(points, up="y", front="-z")
-    points, _, _ = C.normalise(points)
+    points, faces = C.scan("max_planck.ply")
     base = ps.ellipsoid_base(points, n=20000)
     enc = ps.encode(points, base)
     shapes = [ps.reconstruct(enc, gains=[g]) for g in GAINS]

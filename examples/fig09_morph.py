@@ -55,13 +55,9 @@ def align_to(b, a):
 
 def build_morph():
     """(igea points, igea faces, morph, numbers) shared by Fig. 9 and Fig. 10a."""
-    pa, pb = C.need_models("igea.ply", "max_planck.ply")
-    a, faces = C.read_model(pa)
-    b, _ = C.read_model(pb)
-    a = C.align_up(a, up="y", front="z")
-    a, _, _ = C.normalise(a)
-    b = C.align_up(b, up="y", front="-z")
-    b, _, _ = C.normalise(b)
+    C.need_models("igea.ply", "max_planck.ply")  # both, before any work
+    a, faces = C.scan("igea.ply")
+    b, _ = C.scan("max_planck.ply")
     b, choice = align_to(b, a)
     C.log(f"aligned Max Planck to Igea: turned by {choice['rotation_deg']} deg, box scale {choice['box_scale']}")
     base = ps.ellipsoid_base(a, b, n=20000)

@@ -38,17 +38,10 @@ def paint(obj, band, weights):
 
 def main(argv=None):
     args = C.parse_args(__doc__, argv)
-    (path,) = C.need_models("igea.ply")
-    points, faces = C.read_model(path)
-    points = C.align_up(points, up="y", front="z")
-    points, _, _ = C.normalise(points)
+    points, faces = C.scan("igea.ply")
     st = C.Studio(args.quick, 200, 250)
-    C.load_addon()
-    obj = st.mesh(points, faces, "Igea")
-    C.make_active(obj)
+    obj = C.addon_decompose(st, points, faces, "Igea", levels=4)
     settings = obj.data.multiscale
-    settings.levels = 4
-    assert bpy.ops.pointscale.decompose() == {"FINISHED"}
     C.log(f"add-on Decompose: {settings.n_bands} bands on {len(points)} vertices")
     w_smooth, c_smooth = spot(points, (0.75, -0.7, 0.55))   # hair on the statue's left (right in the picture)
     w_enh, c_enh = spot(points, (-0.75, -0.7, 0.55))        # hair on the statue's right

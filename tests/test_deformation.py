@@ -9,20 +9,6 @@ def bump(xy, height=0.8, width=1.0):
     return height * np.exp(-(xy**2).sum(axis=1) / width**2)
 
 
-def handle_angles(result, points, handle, centres, surface):
-    """Angle between each handle's axis (bottom ring to top face) and the surface normal
-    fitted to the plane points around it, in degrees."""
-    angles = []
-    for h, (cx, cy) in enumerate(centres):
-        mine = handle == h
-        top = mine & (points[:, 2] > points[mine, 2].max() - 1e-9)
-        low = mine & (points[:, 2] < 0.03)
-        axis = result[top].mean(axis=0) - result[low].mean(axis=0)
-        r = np.hypot(points[:, 0] - cx, points[:, 1] - cy)
-        ring = surface[(handle == -1) & (r > 0.15) & (r < 0.4)]
-        normal = np.linalg.svd(ring - ring.mean(axis=0), full_matrices=False)[2][2]
-        angles.append(np.degrees(np.arccos(abs(axis @ normal) / np.linalg.norm(axis))))
-    return np.array(angles)
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +28,7 @@ def test_multiscale_handles_follow_the_lifted_base(handles):
     lifted = dec.base.copy()
     lifted[:, 2] += bump(lifted[:, :2])
     result = ps.reconstruct(dec, base=lifted)
-    angles = handle_angles(result, points, handle, centres, lifted)
+    angles = ps.shapes.handle_angles(result, points, handle, centres, lifted)
     assert angles.max() < 3.0, angles
 
 
@@ -50,7 +36,7 @@ def test_single_scale_deformation_tilts_flank_handles(handles):
     points, handle, centres, dec = handles
     moved = points.copy()
     moved[:, 2] += bump(points[:, :2])
-    angles = handle_angles(moved, points, handle, centres, moved)
+    angles = ps.shapes.handle_angles(moved, points, handle, centres, moved)
     assert angles.max() > 10.0, angles
 
 

@@ -13,19 +13,6 @@ def bump(xy, height=0.8, width=1.0):
     return height * np.exp(-(xy**2).sum(axis=1) / width**2)
 
 
-def handle_angles(result, points, handle, centres, surface):
-    """Angle (degrees) between each handle's axis and the normal of the surface around it."""
-    angles = []
-    for i, (cx, cy) in enumerate(centres):
-        mine = handle == i
-        top = mine & (points[:, 2] > points[mine, 2].max() - 1e-6)
-        low = mine & (points[:, 2] < points[mine, 2].min() + 1e-6)
-        axis = result[top].mean(axis=0) - result[low].mean(axis=0)
-        r = np.hypot(points[:, 0] - cx, points[:, 1] - cy)
-        ring = surface[(handle == -1) & (r > 0.15) & (r < 0.4)]
-        normal = np.linalg.svd(ring - ring.mean(axis=0), full_matrices=False)[2][2]
-        angles.append(np.degrees(np.arccos(abs(axis @ normal) / np.linalg.norm(axis))))
-    return np.array(angles)
 
 
 def test_rebuild_detail_keeps_handles_normal_to_the_edited_base():
@@ -51,13 +38,13 @@ def test_rebuild_detail_keeps_handles_normal_to_the_edited_base():
 
     assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
     result = h.key(me, "Multiscale Edit").astype(np.float64)
-    multiscale = handle_angles(result, points, handle, centres, lifted)
+    multiscale = ps.shapes.handle_angles(result, points, handle, centres, lifted)
     assert multiscale.max() < 3.0, multiscale
 
     # The same lift applied to the original points (single scale) tilts the flank handles:
     single = original.copy()
     single[:, 2] += bump(original[:, :2])
-    assert handle_angles(single, points, handle, centres, single).max() > 10.0
+    assert ps.shapes.handle_angles(single, points, handle, centres, single).max() > 10.0
 
     # What Blender shows is the rebuilt result (Multiscale Edit at 1, levels off).
     assert me.shape_keys.key_blocks["Multiscale Edit"].value == 1.0

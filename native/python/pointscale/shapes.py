@@ -96,3 +96,26 @@ def handles_plane(size: float = 4.0, spacing: float = 0.025, count: int = 4, wid
     points = np.vstack([plane[keep]] + parts)
     handle = np.concatenate([np.full(int(keep.sum()), -1)] + labels)
     return points, handle, centres
+
+
+def handle_angles(result, points, handle, centres, surface) -> np.ndarray:
+    """How upright the handles of `handles_plane` stand after a deformation (Fig. 5).
+
+    result   #P by 3 deformed points, indexed like `points`
+    points, handle, centres   as returned by handles_plane
+    surface  #P by 3 positions whose plane points around each handle give the reference normal
+             (the deformed base for a multiscale edit, `result` itself for a single-scale one)
+    Returns (#handles,) angles in degrees between each handle's axis (bottom ring to top face)
+    and the normal of a plane fitted to the surface ring around it.
+    """
+    angles = []
+    for i, (cx, cy) in enumerate(centres):
+        mine = handle == i
+        top = mine & (points[:, 2] > points[mine, 2].max() - 1e-6)
+        low = mine & (points[:, 2] < points[mine, 2].min() + 1e-6)
+        axis = result[top].mean(axis=0) - result[low].mean(axis=0)
+        r = np.hypot(points[:, 0] - cx, points[:, 1] - cy)
+        ring = surface[(handle == -1) & (r > 0.15) & (r < 0.4)]
+        normal = np.linalg.svd(ring - ring.mean(axis=0), full_matrices=False)[2][2]
+        angles.append(np.degrees(np.arccos(abs(axis @ normal) / np.linalg.norm(axis))))
+    return np.array(angles)
