@@ -8,6 +8,7 @@
 
 #include "pointscale/parallel.h"
 #include "pointscale/plane_fit.h"
+#include "pointscale/stencil_plane.h"
 
 namespace pointscale {
 
@@ -29,41 +30,77 @@ void choose_anchors(const Points& fine, const Points& level, LevelSupport& suppo
 
 namespace {
 
-// support_normals with each query position given by query_at(i), so callers that can compute
-// it on the fly need not hold all of them (#Q by 3 doubles) at once.
-template <class QueryAt>
-Points normals_at(Eigen::Index n, const QueryAt& query_at, const Index* query_labels, const Points& centroids,
+// Each cluster's members, contiguous: members[offsets[c] .. offsets[c + 1]) (a counting sort).
+struct ClusterMembers {
+  std::vector<Index> offsets, members;
+};
+
+ClusterMembers group_by_cluster(const Index* labels, Eigen::Index n, Index clusters) {
+  ClusterMembers g;
+  g.offsets.assign(static_cast<std::size_t>(clusters) + 1, 0);
+  for (Eigen::Index i = 0; i < n; ++i) ++g.offsets[static_cast<std::size_t>(labels[i]) + 1];
+  for (std::size_t c = 0; c < static_cast<std::size_t>(clusters); ++c) g.offsets[c + 1] += g.offsets[c];
+  g.members.resize(static_cast<std::size_t>(n));
+  std::vector<Index> next(g.offsets.begin(), g.offsets.end() - 1);
+  for (Eigen::Index i = 0; i < n; ++i) g.members[static_cast<std::size_t>(next[labels[i]]++)] = static_cast<Index>(i);
+  return g;
+}
+
+// support_normals with each query given by offset_at(i, c), its position relative to the
+// centroid of its cluster c, so callers that can compute it on the fly need not hold all of
+// them (#Q by 3 doubles) at once. Works cluster by cluster: all members of a cluster are fitted
+// to the same neighbour clusters, gathered once.
+template <class OffsetAt>
+Points normals_at(Eigen::Index n, const OffsetAt& offset_at, const Index* query_labels, const Points& centroids,
                   const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
   const int k = support.neighbors;
   const bool has_reference = reference.rows() > 0;
+  // A floor on the weights keeps the fit well conditioned where one anchor dominates (a query
+  // far from the others, as at raw-scan outliers): the normal must be a smooth function of the
+  // anchors, since reconstruction re-evaluates it.
+  constexpr double weight_floor = 1e-6;
+  const ClusterMembers groups = group_by_cluster(query_labels, n, support.clusters);
   Points normals(n, 3);
-  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-    std::vector<double> d2(k), ih2(k), w(k);
-    for (std::size_t ii = b; ii < e; ++ii) {
-      const Eigen::Index i = static_cast<Eigen::Index>(ii);
-      const Vec3 x = query_at(i);
-      const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(query_labels[i]) * k;
-      for (int j = 0; j < k; ++j) {
-        d2[j] = (centroids.row(nb[j]).transpose() - x).squaredNorm();
-        const double h = support.h(nb[j]);
-        ih2[j] = 1.0 / (h * h);
+  const std::size_t clusters = static_cast<std::size_t>(support.clusters);
+  const std::size_t chunk = std::max<std::size_t>(1, 512 * clusters / std::max<std::size_t>(1, n));
+  parallel_for(clusters, [&](std::size_t b, std::size_t e) {
+    PlaneStencil stencil;
+    std::vector<double> queries, fitted;
+    std::vector<unsigned char> ok;
+    std::vector<double> w(k, 1.0);
+    for (std::size_t cc = b; cc < e; ++cc) {
+      const Index c = static_cast<Index>(cc);
+      const Index* members = groups.members.data() + groups.offsets[cc];
+      const int m = groups.offsets[cc + 1] - groups.offsets[cc];
+      if (m == 0) continue;
+      const Index* nb = support.neighborhoods.data() + cc * static_cast<std::size_t>(k);
+      const Vec3 origin = centroids.row(c).transpose();
+      stencil.assign(centroids, nb, k, support.h, origin);
+      queries.resize(3 * static_cast<std::size_t>(m));
+      fitted.resize(3 * static_cast<std::size_t>(m));
+      ok.resize(static_cast<std::size_t>(m));
+      for (int t = 0; t < m; ++t) {
+        const Vec3 q = offset_at(members[t], c);
+        queries[3 * t] = q.x(); queries[3 * t + 1] = q.y(); queries[3 * t + 2] = q.z();
       }
-      gaussian_weights(d2.data(), ih2.data(), k, w.data());
-      // A floor on the weights keeps the fit well conditioned where one anchor dominates (a
-      // query far from the others, as at raw-scan outliers): the normal must be a smooth
-      // function of the anchors, since reconstruction re-evaluates it.
-      for (int j = 0; j < k; ++j) w[j] = std::max(w[j], 1e-6);
-      PlaneFit fit = fit_weighted_plane(centroids, nb, w.data(), k, x);
-      if (!fit.ok) {
-        // Never fall back on the reference's direction: it differs between the passes.
-        std::fill(w.begin(), w.end(), 1.0);
-        fit = fit_weighted_plane(centroids, nb, w.data(), k, x);
+      stencil_normals(stencil, queries.data(), m, weight_floor, fitted.data(), ok.data());
+      for (int t = 0; t < m; ++t) {
+        const Eigen::Index i = members[t];
+        Vec3 nrm = Vec3::UnitZ();
+        if (ok[t]) {
+          nrm = Vec3(fitted[3 * t], fitted[3 * t + 1], fitted[3 * t + 2]);
+        } else {
+          // No plane with the Gaussian weights: fall back on uniform ones. Never on the
+          // reference's direction, which differs between the passes.
+          const Vec3 x = origin + Vec3(queries[3 * t], queries[3 * t + 1], queries[3 * t + 2]);
+          const PlaneFit fit = fit_weighted_plane(centroids, nb, w.data(), k, x);
+          if (fit.ok) nrm = fit.normal;
+        }
+        if (has_reference && nrm.dot(reference.row(i).transpose()) < 0.0) nrm = -nrm;
+        normals.row(i) = nrm.transpose();
       }
-      Vec3 nrm = fit.ok ? fit.normal : Vec3(Vec3::UnitZ());
-      if (has_reference && nrm.dot(reference.row(i).transpose()) < 0.0) nrm = -nrm;
-      normals.row(i) = nrm.transpose();
     }
-  }, stage, 512);
+  }, stage, chunk);
   return normals;
 }
 
@@ -71,8 +108,9 @@ Points normals_at(Eigen::Index n, const QueryAt& query_at, const Index* query_la
 
 Points support_normals(const Points& query, const Index* query_labels, const Points& centroids,
                        const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
-  return normals_at(query.rows(), [&](Eigen::Index i) { return Vec3(query.row(i).transpose()); }, query_labels,
-                    centroids, support, reference, stage);
+  return normals_at(query.rows(),
+                    [&](Eigen::Index i, Index c) { return Vec3((query.row(i) - centroids.row(c)).transpose()); },
+                    query_labels, centroids, support, reference, stage);
 }
 
 namespace {
@@ -141,13 +179,6 @@ std::vector<Mat3> cluster_frames(const Points& centroids, const LevelSupport& su
   return frames;
 }
 
-// Point i's query position: its cluster's centroid plus its stored offset in the cluster's frame.
-Vec3 frame_position(const Points& centroids, const LevelSupport& support, const std::vector<Mat3>& frames,
-                    Eigen::Index i) {
-  const Index c = support.labels[i];
-  return centroids.row(c).transpose() + frames[c] * support.local.row(i).transpose();
-}
-
 }  // namespace
 
 Points level_normals(const Points& level, const LevelSupport& support, const Points& reference,
@@ -158,7 +189,8 @@ Points level_normals(const Points& level, const LevelSupport& support, const Poi
 Points anchor_normals(const Points& centroids, const LevelSupport& support, const Points& reference,
                       const ProgressStage& stage) {
   const std::vector<Mat3> frames = cluster_frames(centroids, support);
-  return normals_at(support.local.rows(), [&](Eigen::Index i) { return frame_position(centroids, support, frames, i); },
+  return normals_at(support.local.rows(),
+                    [&](Eigen::Index i, Index c) { return Vec3(frames[c] * support.local.row(i).transpose()); },
                     support.labels.data(), centroids, support, reference, stage);
 }
 

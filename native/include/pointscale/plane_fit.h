@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "pointscale/types.h"
@@ -27,6 +28,12 @@ inline void gaussian_weights(const double* d2, const double* inv_h2, int count, 
   for (int j = 0; j < count; ++j) weights[j] = std::exp(min_e - d2[j] * inv_h2[j]);
 }
 
+// 2^-e for x = m 2^e with m in [1, 2): an exact rescaling to [1, 2). x must be positive and normal.
+inline double inverse_power_of_two(double x) {
+  const std::uint64_t exponent = (__builtin_bit_cast(std::uint64_t, x) >> 52) & 0x7ff;
+  return __builtin_bit_cast(double, (std::uint64_t(2046) - exponent) << 52);
+}
+
 // Unit eigenvector of the smallest eigenvalue of a symmetric positive semi-definite 3x3 matrix,
 // or a zero vector when two eigenvalues vanish (no plane). The adjugate has the same
 // eigenvectors with eigenvalues (l2 l3, l1 l3, l1 l2), so its dominant one is the normal; each
@@ -47,11 +54,14 @@ inline Vec3 smallest_eigenvector(const Mat3& c, double trace) {
   for (double& v : a) v /= scale;
   // Square until the matrix is rank one to working precision (tr^2 = |A|^2 only then), so the
   // column picked below is the eigenvector itself and the result is a smooth function of c.
+  // The iterates stay positive semi-definite, so their trace bounds every entry: rescaling by
+  // the power of two nearest below 1 / trace keeps them in range, exactly and without a
+  // division on the loop's critical path (the scale cancels in the final normalisation).
   for (int i = 0; i < 10; ++i) {
     const double xx = a[0], yy = a[1], zz = a[2], xy = a[3], xz = a[4], yz = a[5];
     const double b[6] = {xx * xx + xy * xy + xz * xz, xy * xy + yy * yy + yz * yz, xz * xz + yz * yz + zz * zz,
                          xx * xy + xy * yy + xz * yz, xx * xz + xy * yz + xz * zz, xy * xz + yy * yz + yz * zz};
-    const double inv = 1.0 / max_abs(b);
+    const double inv = inverse_power_of_two(b[0] + b[1] + b[2]);
     for (int j = 0; j < 6; ++j) a[j] = b[j] * inv;
     const double tr = a[0] + a[1] + a[2];
     const double norm2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + 2.0 * (a[3] * a[3] + a[4] * a[4] + a[5] * a[5]);

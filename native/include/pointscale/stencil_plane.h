@@ -1,0 +1,29 @@
+// The weighted plane normal of Eq. 3 for many query points against one fixed set of K support
+// points: in level_support every point of a cluster is fitted to the same K neighbour clusters.
+// The neighbours are gathered once per cluster, structure-of-arrays and relative to the
+// cluster's origin, so that the per-neighbour loop vectorises.
+#pragma once
+#include <vector>
+
+#include "pointscale/types.h"
+
+namespace pointscale {
+
+struct PlaneStencil {
+  std::vector<double> x, y, z;  // #K neighbour offsets from the origin
+  std::vector<double> inv_h2;   // #K 1 / h^2 of each neighbour's kernel
+  std::vector<double> scratch;  // #K per-query workspace
+  int size = 0;
+
+  // Gathers rows nb[0..k) of points, relative to origin, with kernel widths h(nb[j]).
+  void assign(const Points& points, const Index* nb, int k, const Eigen::VectorXd& h, const Vec3& origin);
+};
+
+// Normals of the weighted least-squares planes at m query offsets (relative to the stencil's
+// origin), with Gaussian weights scaled so that the largest is 1 and floored at weight_floor,
+// exactly as fit_weighted_plane over gaussian_weights. ok[i] = 0 where the fit has no plane
+// (normals[i] is then left unset). queries #m by 3 row-major, normals #m by 3 row-major.
+void stencil_normals(PlaneStencil& stencil, const double* queries, int m, double weight_floor, double* normals,
+                     unsigned char* ok);
+
+}  // namespace pointscale

@@ -1,0 +1,77 @@
+#include "pointscale/stencil_plane.h"
+
+#include <cmath>
+#include <limits>
+
+#include "pointscale/fast_exp.h"
+#include "pointscale/plane_fit.h"
+
+// The kernel is built twice, for AVX2+FMA and for the baseline, and picked at load time: the
+// wheel must run on any x86-64, and the per-neighbour loop is four times wider with AVX2.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define POINTSCALE_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define POINTSCALE_CLONES
+#endif
+
+namespace pointscale {
+
+void PlaneStencil::assign(const Points& points, const Index* nb, int k, const Eigen::VectorXd& h,
+                          const Vec3& origin) {
+  size = k;
+  x.resize(k); y.resize(k); z.resize(k); inv_h2.resize(k); scratch.resize(k);
+  for (int j = 0; j < k; ++j) {
+    x[j] = points(nb[j], 0) - origin.x();
+    y[j] = points(nb[j], 1) - origin.y();
+    z[j] = points(nb[j], 2) - origin.z();
+    const double hj = h(nb[j]);
+    inv_h2[j] = 1.0 / (hj * hj);
+  }
+}
+
+POINTSCALE_CLONES
+void stencil_normals(PlaneStencil& stencil, const double* queries, int m, double weight_floor, double* normals,
+                     unsigned char* ok) {
+  const int k = stencil.size;
+  const double* __restrict px = stencil.x.data();
+  const double* __restrict py = stencil.y.data();
+  const double* __restrict pz = stencil.z.data();
+  const double* __restrict ih2 = stencil.inv_h2.data();
+  double* __restrict e = stencil.scratch.data();
+  for (int i = 0; i < m; ++i) {
+    const double qx = queries[3 * i], qy = queries[3 * i + 1], qz = queries[3 * i + 2];
+    double min_e = std::numeric_limits<double>::infinity();
+#pragma omp simd reduction(min : min_e)
+    for (int j = 0; j < k; ++j) {
+      const double dx = px[j] - qx, dy = py[j] - qy, dz = pz[j] - qz;
+      e[j] = (dx * dx + dy * dy + dz * dz) * ih2[j];
+      min_e = e[j] < min_e ? e[j] : min_e;
+    }
+    // Sums relative to the query, as fit_weighted_plane takes them.
+    double sw = 0, sx = 0, sy = 0, sz = 0, sxx = 0, syy = 0, szz = 0, sxy = 0, sxz = 0, syz = 0;
+#pragma omp simd reduction(+ : sw, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz)
+    for (int j = 0; j < k; ++j) {
+      double w = exp_nonpositive(min_e - e[j]);
+      w = w > weight_floor ? w : weight_floor;
+      const double dx = px[j] - qx, dy = py[j] - qy, dz = pz[j] - qz;
+      const double wx = w * dx, wy = w * dy, wz = w * dz;
+      sw += w; sx += wx; sy += wy; sz += wz;
+      sxx += wx * dx; syy += wy * dy; szz += wz * dz;
+      sxy += wx * dy; sxz += wx * dz; syz += wy * dz;
+    }
+    ok[i] = 0;
+    if (!(sw > 0.0)) continue;
+    const Vec3 mean(sx / sw, sy / sw, sz / sw);
+    Mat3 cov;
+    cov << sxx / sw, sxy / sw, sxz / sw, sxy / sw, syy / sw, syz / sw, sxz / sw, syz / sw, szz / sw;
+    cov -= mean * mean.transpose();
+    const double trace = cov.trace();
+    if (!(trace > 0.0)) continue;
+    const Vec3 normal = smallest_eigenvector(cov, trace);
+    if (!(normal.squaredNorm() > 0.5)) continue;
+    normals[3 * i] = normal.x(); normals[3 * i + 1] = normal.y(); normals[3 * i + 2] = normal.z();
+    ok[i] = 1;
+  }
+}
+
+}  // namespace pointscale
