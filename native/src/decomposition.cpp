@@ -11,6 +11,7 @@
 #include "pointscale/release_memory.h"
 #include "pointscale/sample_spacing.h"
 #include "pointscale/spatial_index.h"
+#include "pointscale/spatial_order.h"
 
 namespace pointscale {
 
@@ -144,6 +145,10 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   Points fine = std::move(points);
   std::vector<Points> anchors(k);
   model.details.resize(k, n);
+  // Every level keeps the input's point order, so one spatial order serves all projections.
+  const IndexList order = morton_order(fine);
+  MlsOptions mls = options.mls;
+  mls.order = &order;
 
   for (int step = 0; step < k; ++step) {
     const int l = k - step;  // builds level l-1 from level l
@@ -160,7 +165,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     const Eigen::VectorXd h = options.kernel * local_spacing(q_index, 6);
 
     // Project P^l onto the MLS surface of Q^{l-1}.
-    MlsResult projected = mls_project(fine, q_index, h, options.mls, stage.sub(0.1, 0.8));
+    MlsResult projected = mls_project(fine, q_index, h, mls, stage.sub(0.1, 0.8));
 
     // The level's own support: clusters, their neighbourhoods and kernels.
     LevelSupport& support = model.support[l - 1];

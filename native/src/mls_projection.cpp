@@ -5,9 +5,10 @@
 #include <utility>
 #include <limits>
 
+#include "pointscale/candidate_plane.h"
 #include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
-#include "pointscale/plane_fit.h"
+#include "pointscale/spatial_order.h"
 
 namespace pointscale {
 
@@ -34,13 +35,18 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   // the moved foot, and query again only when the foot has moved so far that a closer point
   // could lie outside the candidates (d_k + 2 moved > d_kc): the same neighbours as a fresh query.
   const int kc = std::min<int>(k + 8, support.size());
+  const bool given = options.order && options.order->size() == static_cast<std::size_t>(n);
+  const IndexList own_order = given ? IndexList() : morton_order(x);
+  const IndexList& order = given ? *options.order : own_order;
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-    std::vector<Index> idx(k), cand(kc);
-    std::vector<double> d2(k), ih2(k), w(k), cand_d2(kc);
-    std::vector<std::pair<double, Index>> order(kc);
-    for (std::size_t i = b; i < e; ++i) {
+    std::vector<Index> cand(kc);
+    std::vector<double> cand_d2(kc);
+    CandidateSet set;
+    for (std::size_t t = b; t < e; ++t) {
+      const auto i = static_cast<std::size_t>(order[t]);
       const Vec3 p = x.row(static_cast<Eigen::Index>(i)).transpose();
-      Vec3 foot = p;
+      // The foot and the plane are kept relative to p, as the candidates are.
+      Vec3 foot = Vec3::Zero();
       Vec3 normal = Vec3::Zero();
       bool converged = false, ok = false;
       double last_step = std::numeric_limits<double>::infinity(), damping = 1.0;
@@ -50,37 +56,38 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
       for (int it = 0; it < options.max_iterations; ++it) {
         if (candidates == 0 || 2.0 * (foot - queried).norm() >= reach) {
           queried = foot;
-          candidates = support.knn(foot.data(), kc, cand.data(), cand_d2.data());
+          const Vec3 at = p + foot;
+          candidates = support.knn(at.data(), kc, cand.data(), cand_d2.data());
           const int kth = std::min(k, candidates) - 1;
           reach = candidates > k ? std::sqrt(cand_d2[candidates - 1]) - std::sqrt(cand_d2[kth]) : 0.0;
           if (candidates <= k) reach = std::numeric_limits<double>::infinity();  // all there is
-        }
-        for (int j = 0; j < candidates; ++j) order[j] = {(s.row(cand[j]).transpose() - foot).squaredNorm(), cand[j]};
-        const int found = std::min(k, candidates);
-        std::partial_sort(order.begin(), order.begin() + found, order.begin() + candidates);
-        for (int j = 0; j < found; ++j) { d2[j] = order[j].first; idx[j] = order[j].second; }
-        for (int j = 0; j < found; ++j) ih2[j] = inv_h2(idx[j]);
-        if (sheet_normals) {
-          for (int j = 0; j < found; ++j) {
+          set.resize(candidates);
+          for (int j = 0; j < candidates; ++j) {
+            const Index c = cand[j];
+            set.x[j] = s(c, 0) - p.x(); set.y[j] = s(c, 1) - p.y(); set.z[j] = s(c, 2) - p.z();
+            set.h[j] = h(c);
+            set.inv_h2[j] = inv_h2(c);
             // Measured from the point being projected, not the moving foot, so that the foot
             // cannot drift towards the other sheet and take the weights along.
-            const double along = sheet_normals->row(idx[j]).dot(s.row(idx[j]) - p.transpose());
-            d2[j] += sheet_extra * along * along;
+            double along = 0.0;
+            if (sheet_normals) along = sheet_normals->row(c).dot(s.row(c) - p.transpose());
+            set.extra[j] = sheet_extra * along * along;
           }
         }
-        gaussian_weights(d2.data(), ih2.data(), found, w.data());
-        const PlaneFit fit = fit_weighted_plane(s, idx.data(), w.data(), found, foot);
+        double nearest_h = 0.0;
+        const PlaneFit fit = fit_nearest_plane(set, k, foot, nearest_h);
         if (!fit.ok) break;
         ok = true;
         normal = fit.normal;
-        const Vec3 next = p - (p - fit.mean).dot(normal) * normal;
+        const Vec3 next = fit.mean.dot(normal) * normal;  // p projected onto the plane, relative to p
         const double step = (next - foot).norm();
         // Near sharp features the foot point can swing back and forth: damp a growing step.
         if (step > last_step) damping = std::max(damping * 0.5, 1.0 / 64.0);
         last_step = step;
         foot += damping * (next - foot);
-        if (step <= options.tolerance * h(idx[0])) { converged = true; break; }
+        if (step <= options.tolerance * nearest_h) { converged = true; break; }
       }
+      foot += p;
       out.positions.row(static_cast<Eigen::Index>(i)) = foot.transpose();
       out.normals.row(static_cast<Eigen::Index>(i)) = normal.transpose();
       if (!ok) degenerate[i] = 1;

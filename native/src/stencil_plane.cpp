@@ -5,14 +5,7 @@
 
 #include "pointscale/fast_exp.h"
 #include "pointscale/plane_fit.h"
-
-// The kernel is built twice, for AVX2+FMA and for the baseline, and picked at load time: the
-// wheel must run on any x86-64, and the per-neighbour loop is four times wider with AVX2.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define POINTSCALE_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define POINTSCALE_CLONES
-#endif
+#include "pointscale/simd_clones.h"
 
 namespace pointscale {
 
@@ -59,18 +52,9 @@ void stencil_normals(PlaneStencil& stencil, const double* queries, int m, double
       sxx += wx * dx; syy += wy * dy; szz += wz * dz;
       sxy += wx * dy; sxz += wx * dz; syz += wy * dz;
     }
-    ok[i] = 0;
-    if (!(sw > 0.0)) continue;
-    const Vec3 mean(sx / sw, sy / sw, sz / sw);
-    Mat3 cov;
-    cov << sxx / sw, sxy / sw, sxz / sw, sxy / sw, syy / sw, syz / sw, sxz / sw, syz / sw, szz / sw;
-    cov -= mean * mean.transpose();
-    const double trace = cov.trace();
-    if (!(trace > 0.0)) continue;
-    const Vec3 normal = smallest_eigenvector(cov, trace);
-    if (!(normal.squaredNorm() > 0.5)) continue;
-    normals[3 * i] = normal.x(); normals[3 * i + 1] = normal.y(); normals[3 * i + 2] = normal.z();
-    ok[i] = 1;
+    const PlaneFit fit = plane_from_sums(sw, Vec3(sx, sy, sz), sxx, syy, szz, sxy, sxz, syz, Vec3::Zero());
+    ok[i] = fit.ok;
+    if (fit.ok) { normals[3 * i] = fit.normal.x(); normals[3 * i + 1] = fit.normal.y(); normals[3 * i + 2] = fit.normal.z(); }
   }
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 #include "pointscale/progress.h"
 #include "pointscale/spatial_index.h"
+#include "pointscale/types.h"
 
 namespace pointscale {
 
@@ -18,6 +19,9 @@ struct MlsOptions {
   const Points* support_normals = nullptr;
   double sheet = 0.2;         // normal kernel width as a fraction of h, in (0, 1]
   bool thin_sheets = false;   // the same weights with normals estimated from 16 support neighbours
+  // The order in which the points are projected (spatial_order.h), or nullptr to compute a
+  // Morton order; callers projecting the same points repeatedly compute it once.
+  const IndexList* order = nullptr;
 };
 
 struct MlsResult {

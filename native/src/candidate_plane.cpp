@@ -1,0 +1,72 @@
+#include "pointscale/candidate_plane.h"
+
+#include <algorithm>
+#include <limits>
+
+#include "pointscale/fast_exp.h"
+#include "pointscale/simd_clones.h"
+
+namespace pointscale {
+
+void CandidateSet::resize(int count) {
+  size = count;
+  for (auto* v : {&x, &y, &z, &inv_h2, &h, &extra, &r2, &e}) v->resize(static_cast<std::size_t>(count));
+}
+
+POINTSCALE_CLONES
+PlaneFit fit_nearest_plane(CandidateSet& c, int k, const Vec3& foot, double& nearest_h) {
+  const int n = c.size;
+  k = std::min(k, n);
+  const double fx = foot.x(), fy = foot.y(), fz = foot.z();
+  const double* __restrict px = c.x.data();
+  const double* __restrict py = c.y.data();
+  const double* __restrict pz = c.z.data();
+  double* __restrict r2 = c.r2.data();
+#pragma omp simd
+  for (int j = 0; j < n; ++j) {
+    const double dx = px[j] - fx, dy = py[j] - fy, dz = pz[j] - fz;
+    r2[j] = dx * dx + dy * dy + dz * dz;
+  }
+  // The candidates come sorted by distance from the projected point, and the foot moves little:
+  // usually the first k are still the k nearest, which one max and one min confirm.
+  double inner = 0.0, outer = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < k; ++j) inner = r2[j] > inner ? r2[j] : inner;
+  for (int j = k; j < n; ++j) outer = r2[j] < outer ? r2[j] : outer;
+  double limit = inner;  // candidates with r2 <= limit take part
+  if (!(inner < outer)) {
+    std::vector<double>& sorted = c.e;
+    std::copy(r2, r2 + n, sorted.begin());
+    std::nth_element(sorted.begin(), sorted.begin() + (k - 1), sorted.begin() + n);
+    limit = sorted[static_cast<std::size_t>(k - 1)];
+  }
+  const bool prefix = inner < outer;
+  const int m = prefix ? k : n;  // with the prefix, the rest need not be looked at
+  const double* __restrict ih2 = c.inv_h2.data();
+  const double* __restrict extra = c.extra.data();
+  double* __restrict e = c.e.data();
+  double min_e = std::numeric_limits<double>::infinity();
+  double nearest = std::numeric_limits<double>::infinity();
+  nearest_h = c.h[0];
+  for (int j = 0; j < m; ++j) {
+    if (r2[j] < nearest) { nearest = r2[j]; nearest_h = c.h[static_cast<std::size_t>(j)]; }
+  }
+#pragma omp simd reduction(min : min_e)
+  for (int j = 0; j < m; ++j) {
+    e[j] = (r2[j] + extra[j]) * ih2[j];
+    const double masked = r2[j] <= limit ? e[j] : std::numeric_limits<double>::infinity();
+    min_e = masked < min_e ? masked : min_e;
+  }
+  double sw = 0, sx = 0, sy = 0, sz = 0, sxx = 0, syy = 0, szz = 0, sxy = 0, sxz = 0, syz = 0;
+#pragma omp simd reduction(+ : sw, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz)
+  for (int j = 0; j < m; ++j) {
+    const double w = r2[j] <= limit ? exp_nonpositive(min_e - e[j]) : 0.0;
+    const double dx = px[j] - fx, dy = py[j] - fy, dz = pz[j] - fz;
+    const double wx = w * dx, wy = w * dy, wz = w * dz;
+    sw += w; sx += wx; sy += wy; sz += wz;
+    sxx += wx * dx; syy += wy * dy; szz += wz * dz;
+    sxy += wx * dy; sxz += wx * dz; syz += wy * dz;
+  }
+  return plane_from_sums(sw, Vec3(sx, sy, sz), sxx, syy, szz, sxy, sxz, syz, foot);
+}
+
+}  // namespace pointscale
