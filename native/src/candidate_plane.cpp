@@ -14,7 +14,7 @@ void CandidateSet::resize(int count) {
 }
 
 POINTSCALE_CLONES
-PlaneFit fit_nearest_plane(CandidateSet& c, int k, const Vec3& foot, double& nearest_h) {
+PlaneFit fit_nearest_plane(CandidateSet& c, int k, const Vec3& foot, double& nearest_h, double& kth_d2) {
   const int n = c.size;
   k = std::min(k, n);
   const double fx = foot.x(), fy = foot.y(), fz = foot.z();
@@ -39,6 +39,7 @@ PlaneFit fit_nearest_plane(CandidateSet& c, int k, const Vec3& foot, double& nea
     std::nth_element(sorted.begin(), sorted.begin() + (k - 1), sorted.begin() + n);
     limit = sorted[static_cast<std::size_t>(k - 1)];
   }
+  kth_d2 = limit;
   const bool prefix = inner < outer;
   const int m = prefix ? k : n;  // with the prefix, the rest need not be looked at
   const double* __restrict ih2 = c.inv_h2.data();

@@ -31,51 +31,64 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   out.normals.resize(n, 3);
   std::vector<unsigned char> failed(n, 0), degenerate(n, 0);
 
-  // Each point queries kc > k candidates once; later iterations take the k nearest of them to
-  // the moved foot, and query again only when the foot has moved so far that a closer point
-  // could lie outside the candidates (d_k + 2 moved > d_kc): the same neighbours as a fresh query.
+  // A kd-tree query returns the kc > k support points nearest to a centre, all of them within
+  // its radius R. They hold the k nearest of any position x with |x - centre| + d_k(x) < R,
+  // d_k(x) the k-th distance among them: those are then x's k nearest (the ball of radius
+  // d_k(x) around x lies inside R). So one query serves the foot while it moves, and, points
+  // coming in Morton order, the points after it, until that test fails. The neighbours are
+  // always those of a fresh query.
   const int kc = std::min<int>(k + 8, support.size());
   const bool given = options.order && options.order->size() == static_cast<std::size_t>(n);
   const IndexList own_order = given ? IndexList() : morton_order(x);
   const IndexList& order = given ? *options.order : own_order;
+  const double everything = std::numeric_limits<double>::infinity();
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
     std::vector<Index> cand(kc);
     std::vector<double> cand_d2(kc);
     CandidateSet set;
+    int candidates = 0;
+    Vec3 centre = Vec3::Zero();
+    double radius = 0.0;
+    auto query = [&](const Vec3& at) {
+      candidates = support.knn(at.data(), kc, cand.data(), cand_d2.data());
+      centre = at;
+      radius = candidates < kc || kc == support.size() ? everything : std::sqrt(cand_d2[candidates - 1]);
+    };
+    // The candidates relative to p, in the order of the query (nearest to its centre first):
+    // fit_nearest_plane finds the k nearest of the foot at the front when the foot is near the
+    // centre, and sorts them out itself otherwise.
+    auto gather = [&](const Vec3& p) {
+      set.resize(candidates);
+      for (int j = 0; j < candidates; ++j) {
+        const Index c = cand[j];
+        set.x[j] = s(c, 0) - p.x(); set.y[j] = s(c, 1) - p.y(); set.z[j] = s(c, 2) - p.z();
+        set.h[j] = h(c);
+        set.inv_h2[j] = inv_h2(c);
+        // Measured from the point being projected, not the moving foot, so that the foot
+        // cannot drift towards the other sheet and take the weights along.
+        double along = 0.0;
+        if (sheet_normals) along = sheet_normals->row(c).dot(s.row(c) - p.transpose());
+        set.extra[j] = sheet_extra * along * along;
+      }
+    };
     for (std::size_t t = b; t < e; ++t) {
       const auto i = static_cast<std::size_t>(order[t]);
       const Vec3 p = x.row(static_cast<Eigen::Index>(i)).transpose();
+      if (candidates == 0) query(p);
+      gather(p);
       // The foot and the plane are kept relative to p, as the candidates are.
       Vec3 foot = Vec3::Zero();
       Vec3 normal = Vec3::Zero();
       bool converged = false, ok = false;
       double last_step = std::numeric_limits<double>::infinity(), damping = 1.0;
-      Vec3 queried = foot;
-      int candidates = 0;
-      double reach = 0.0;  // d_kc - d_k at the last query: how far the foot may move, twice over
       for (int it = 0; it < options.max_iterations; ++it) {
-        if (candidates == 0 || 2.0 * (foot - queried).norm() >= reach) {
-          queried = foot;
-          const Vec3 at = p + foot;
-          candidates = support.knn(at.data(), kc, cand.data(), cand_d2.data());
-          const int kth = std::min(k, candidates) - 1;
-          reach = candidates > k ? std::sqrt(cand_d2[candidates - 1]) - std::sqrt(cand_d2[kth]) : 0.0;
-          if (candidates <= k) reach = std::numeric_limits<double>::infinity();  // all there is
-          set.resize(candidates);
-          for (int j = 0; j < candidates; ++j) {
-            const Index c = cand[j];
-            set.x[j] = s(c, 0) - p.x(); set.y[j] = s(c, 1) - p.y(); set.z[j] = s(c, 2) - p.z();
-            set.h[j] = h(c);
-            set.inv_h2[j] = inv_h2(c);
-            // Measured from the point being projected, not the moving foot, so that the foot
-            // cannot drift towards the other sheet and take the weights along.
-            double along = 0.0;
-            if (sheet_normals) along = sheet_normals->row(c).dot(s.row(c) - p.transpose());
-            set.extra[j] = sheet_extra * along * along;
-          }
+        double nearest_h = 0.0, kth_d2 = 0.0;
+        PlaneFit fit = fit_nearest_plane(set, k, foot, nearest_h, kth_d2);
+        if (radius < everything && !((p + foot - centre).norm() + std::sqrt(kth_d2) < radius)) {
+          query(p + foot);
+          gather(p);
+          fit = fit_nearest_plane(set, k, foot, nearest_h, kth_d2);
         }
-        double nearest_h = 0.0;
-        const PlaneFit fit = fit_nearest_plane(set, k, foot, nearest_h);
         if (!fit.ok) break;
         ok = true;
         normal = fit.normal;
@@ -93,7 +106,7 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
       if (!ok) degenerate[i] = 1;
       else if (!converged) failed[i] = 1;
     }
-  }, stage, 128);
+  }, stage, 1024);
   for (Eigen::Index i = 0; i < n; ++i) { out.not_converged += failed[i]; out.degenerate += degenerate[i]; }
   return out;
 }

@@ -25,7 +25,8 @@ struct CandidateSet {
 // The plane of the k candidates nearest to foot (an offset from the projected point), with
 // Gaussian weights exp(-(|c_j - foot|^2 + extra_j) / h_j^2) scaled so that the largest is 1,
 // exactly as fit_weighted_plane over gaussian_weights. fit.mean is an offset from the projected
-// point too. nearest_h receives the kernel width of the nearest candidate.
-PlaneFit fit_nearest_plane(CandidateSet& candidates, int k, const Vec3& foot, double& nearest_h);
+// point too. nearest_h receives the kernel width of the nearest candidate, kth_d2 the squared
+// distance of the k-th nearest.
+PlaneFit fit_nearest_plane(CandidateSet& candidates, int k, const Vec3& foot, double& nearest_h, double& kth_d2);
 
 }  // namespace pointscale
