@@ -146,7 +146,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   std::vector<Points> anchors(k);
   model.details.resize(k, n);
   // Every level keeps the input's point order, so one spatial order serves all projections.
-  const IndexList order = morton_order(fine);
+  IndexList order = morton_order(fine);
   MlsOptions mls = options.mls;
   mls.order = &order;
 
@@ -199,6 +199,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     report.pinned = consistency.pinned;
   }
 
+  IndexList().swap(order);  // the peak comes below, in the orientation
   release_free_memory();
   // Orientation: level 0 from the input normals, or by propagation over the level-0 clusters;
   // every finer level agrees with the level below it at the same point (as reconstruction does).
