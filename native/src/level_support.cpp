@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pointscale/batched_eigen.h"
 #include "pointscale/parallel.h"
 #include "pointscale/plane_fit.h"
 #include "pointscale/stencil_plane.h"
@@ -76,9 +77,39 @@ Points normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offs
   const std::size_t chunk = std::max<std::size_t>(1, 512 * clusters / std::max<std::size_t>(1, n));
   parallel_for(clusters, [&](std::size_t b, std::size_t e) {
     PlaneStencil stencil;
-    std::vector<double> queries, fitted;
-    std::vector<unsigned char> ok;
+    std::vector<double> queries, cov, trace, valid;
     std::vector<double> w(k, 1.0);
+    // Covariances wait here, from any cluster, until eight fill one batched eigen solve.
+    struct Pending {
+      alignas(64) double cov[6][eigen_lanes], trace[eigen_lanes], used[eigen_lanes];
+      Eigen::Index row[eigen_lanes];
+      Index cluster[eigen_lanes];
+      Vec3 query[eigen_lanes];
+      int count = 0;
+    } pending;
+    auto flush = [&]() {
+      for (int l = pending.count; l < eigen_lanes; ++l) pending.used[l] = 0.0;
+      alignas(64) double solved[3][eigen_lanes], ok[eigen_lanes];
+      solve_eigen_batch(pending.cov, pending.trace, pending.used, solved, ok);
+      for (int l = 0; l < pending.count; ++l) {
+        const Eigen::Index i = pending.row[l];
+        Vec3 nrm = Vec3::UnitZ();
+        if (ok[l] != 0.0) {
+          nrm = Vec3(solved[0][l], solved[1][l], solved[2][l]);
+        } else {
+          // No plane with the Gaussian weights: fall back on uniform ones. Never on the
+          // reference's direction, which differs between the passes.
+          const Index c = pending.cluster[l];
+          const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(c) * k;
+          const Vec3 x = centroids.row(c).transpose() + pending.query[l];
+          const PlaneFit fit = fit_weighted_plane(centroids, nb, w.data(), k, x);
+          if (fit.ok) nrm = fit.normal;
+        }
+        if (has_reference && nrm.dot(reference.row(i).transpose()) < 0.0) nrm = -nrm;
+        normals.row(i) = nrm.transpose();
+      }
+      pending.count = 0;
+    };
     // A cluster's members lie anywhere in the point order, and waiting for their rows from
     // memory took most of this loop's time: fetch the next cluster's rows while this one works.
     auto prefetch = [&](std::size_t cc) {
@@ -98,32 +129,28 @@ Points normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offs
       const int m = groups.offsets[cc + 1] - groups.offsets[cc];
       if (m == 0) continue;
       const Index* nb = support.neighborhoods.data() + cc * static_cast<std::size_t>(k);
-      const Vec3 origin = centroids.row(c).transpose();
-      stencil.assign(centroids, nb, k, support.h, origin);
-      queries.resize(3 * static_cast<std::size_t>(m));
-      fitted.resize(3 * static_cast<std::size_t>(m));
-      ok.resize(static_cast<std::size_t>(m));
+      stencil.assign(centroids, nb, k, support.h, centroids.row(c).transpose());
+      const auto mm = static_cast<std::size_t>(m);
+      queries.resize(3 * mm); cov.resize(6 * mm); trace.resize(mm); valid.resize(mm);
       for (int t = 0; t < m; ++t) {
         const Vec3 q = offset_at(members[t], c);
         queries[3 * t] = q.x(); queries[3 * t + 1] = q.y(); queries[3 * t + 2] = q.z();
       }
-      stencil_normals(stencil, queries.data(), m, weight_floor, fitted.data(), ok.data());
+      stencil_covariances(stencil, queries.data(), m, weight_floor, cov.data(), trace.data(), valid.data());
       for (int t = 0; t < m; ++t) {
-        const Eigen::Index i = members[t];
-        Vec3 nrm = Vec3::UnitZ();
-        if (ok[t]) {
-          nrm = Vec3(fitted[3 * t], fitted[3 * t + 1], fitted[3 * t + 2]);
-        } else {
-          // No plane with the Gaussian weights: fall back on uniform ones. Never on the
-          // reference's direction, which differs between the passes.
-          const Vec3 x = origin + Vec3(queries[3 * t], queries[3 * t + 1], queries[3 * t + 2]);
-          const PlaneFit fit = fit_weighted_plane(centroids, nb, w.data(), k, x);
-          if (fit.ok) nrm = fit.normal;
-        }
-        if (has_reference && nrm.dot(reference.row(i).transpose()) < 0.0) nrm = -nrm;
-        normals.row(i) = nrm.transpose();
+        const int l = pending.count++;
+        const bool plane = valid[t] != 0.0;
+        // A lane without a plane holds a harmless one, and the fallback runs for it.
+        for (int j = 0; j < 6; ++j) pending.cov[j][l] = plane ? cov[6 * t + j] : (j == 1 || j == 2 ? 1.0 : 0.0);
+        pending.trace[l] = plane ? trace[t] : 2.0;
+        pending.used[l] = plane ? 1.0 : 0.0;
+        pending.row[l] = members[t];
+        pending.cluster[l] = c;
+        pending.query[l] = Vec3(queries[3 * t], queries[3 * t + 1], queries[3 * t + 2]);
+        if (pending.count == eigen_lanes) flush();
       }
     }
+    if (pending.count > 0) flush();
   }, stage, chunk);
   return normals;
 }

@@ -3,9 +3,7 @@
 #include <cmath>
 #include <limits>
 
-#include "pointscale/batched_eigen.h"
 #include "pointscale/fast_exp.h"
-#include "pointscale/plane_fit.h"
 #include "pointscale/simd_clones.h"
 
 namespace pointscale {
@@ -23,84 +21,98 @@ void PlaneStencil::assign(const Points& points, const Index* nb, int k, const Ei
   }
 }
 
+namespace {
+
+// The covariance from the sums, as plane_from_sums forms it (up to rounding).
+inline void covariance_from_sums(double sw, double sx, double sy, double sz, double sxx, double syy, double szz,
+                                 double sxy, double sxz, double syz, double* cov, double& trace, double& valid) {
+  const bool weighed = sw > 0.0;
+  const double inv = 1.0 / (weighed ? sw : 1.0);
+  const double mx = sx * inv, my = sy * inv, mz = sz * inv;
+  cov[0] = sxx * inv - mx * mx; cov[1] = syy * inv - my * my; cov[2] = szz * inv - mz * mz;
+  cov[3] = sxy * inv - mx * my; cov[4] = sxz * inv - mx * mz; cov[5] = syz * inv - my * mz;
+  trace = cov[0] + cov[1] + cov[2];
+  valid = weighed && trace > 0.0 ? 1.0 : 0.0;
+}
+
+}  // namespace
+
 POINTSCALE_CLONES
-void stencil_normals(PlaneStencil& stencil, const double* queries, int m, double weight_floor, double* normals,
-                     unsigned char* ok) {
+void stencil_covariances(PlaneStencil& stencil, const double* queries, int m, double weight_floor, double* cov,
+                         double* trace, double* valid) {
   const int k = stencil.size;
   const double* __restrict px = stencil.x.data();
   const double* __restrict py = stencil.y.data();
   const double* __restrict pz = stencil.z.data();
   const double* __restrict ih2 = stencil.inv_h2.data();
   double* __restrict e = stencil.scratch.data();  // #K by query_lanes
-  // Lanes are queries, not neighbours: every member of the cluster meets the same neighbours, so
-  // neighbour j is one broadcast value and the loops need no horizontal sums. Four queries at a
-  // time keep the ten sums in ten AVX2 registers; their eigenvectors go eight at a time.
+  // Whole groups of four queries: lanes are queries, not neighbours. Every member of the
+  // cluster meets the same neighbours, so neighbour j is one broadcast value and no horizontal
+  // sums are left; four at a time keep the ten sums in ten AVX2 registers.
   constexpr int query_lanes = 4;
-  for (int first = 0; first < m; first += eigen_lanes) {
-    alignas(64) double cov[6][eigen_lanes], trace[eigen_lanes], normal[3][eigen_lanes];
-    alignas(64) double used[eigen_lanes], found[eigen_lanes];
-    for (int half = 0; half < eigen_lanes; half += query_lanes) {
-      alignas(32) double qx[query_lanes], qy[query_lanes], qz[query_lanes], min_e[query_lanes];
-      for (int l = 0; l < query_lanes; ++l) {
-        const int i = first + half + l;
-        const bool real = i < m;  // a spare lane computes at the origin and is dropped
-        qx[l] = real ? queries[3 * i] : 0.0;
-        qy[l] = real ? queries[3 * i + 1] : 0.0;
-        qz[l] = real ? queries[3 * i + 2] : 0.0;
-        min_e[l] = std::numeric_limits<double>::infinity();
-      }
-      for (int j = 0; j < k; ++j) {
-#pragma omp simd
-        for (int l = 0; l < query_lanes; ++l) {
-          const double dx = px[j] - qx[l], dy = py[j] - qy[l], dz = pz[j] - qz[l];
-          const double v = (dx * dx + dy * dy + dz * dz) * ih2[j];
-          e[j * query_lanes + l] = v;
-          min_e[l] = v < min_e[l] ? v : min_e[l];
-        }
-      }
-      // Sums relative to each query, as fit_weighted_plane takes them.
-      alignas(32) double sw[query_lanes] = {}, sx[query_lanes] = {}, sy[query_lanes] = {}, sz[query_lanes] = {},
-                         sxx[query_lanes] = {}, syy[query_lanes] = {}, szz[query_lanes] = {}, sxy[query_lanes] = {},
-                         sxz[query_lanes] = {}, syz[query_lanes] = {};
-      for (int j = 0; j < k; ++j) {
-#pragma omp simd
-        for (int l = 0; l < query_lanes; ++l) {
-          double w = exp_nonpositive(min_e[l] - e[j * query_lanes + l]);
-          w = w > weight_floor ? w : weight_floor;
-          const double dx = px[j] - qx[l], dy = py[j] - qy[l], dz = pz[j] - qz[l];
-          const double wx = w * dx, wy = w * dy, wz = w * dz;
-          sw[l] += w; sx[l] += wx; sy[l] += wy; sz[l] += wz;
-          sxx[l] += wx * dx; syy[l] += wy * dy; szz[l] += wz * dz;
-          sxy[l] += wx * dy; sxz[l] += wx * dz; syz[l] += wy * dz;
-        }
-      }
-      // The covariance, as plane_from_sums forms it (up to rounding); an unused lane holds a
-      // harmless plane.
+  const int grouped = m - m % query_lanes;
+  for (int first = 0; first < grouped; first += query_lanes) {
+    alignas(32) double qx[query_lanes], qy[query_lanes], qz[query_lanes], min_e[query_lanes];
+    for (int l = 0; l < query_lanes; ++l) {
+      qx[l] = queries[3 * (first + l)];
+      qy[l] = queries[3 * (first + l) + 1];
+      qz[l] = queries[3 * (first + l) + 2];
+      min_e[l] = std::numeric_limits<double>::infinity();
+    }
+    for (int j = 0; j < k; ++j) {
 #pragma omp simd
       for (int l = 0; l < query_lanes; ++l) {
-        const int lane = half + l;
-        const bool weighed = (first + lane < m) & (sw[l] > 0.0);
-        const double inv = 1.0 / (weighed ? sw[l] : 1.0);
-        const double mx = sx[l] * inv, my = sy[l] * inv, mz = sz[l] * inv;
-        const double cxx = sxx[l] * inv - mx * mx, cyy = syy[l] * inv - my * my, czz = szz[l] * inv - mz * mz;
-        const double tr = cxx + cyy + czz;
-        const bool valid = weighed & (tr > 0.0);
-        cov[0][lane] = valid ? cxx : 0.0;
-        cov[1][lane] = valid ? cyy : 1.0;
-        cov[2][lane] = valid ? czz : 1.0;
-        cov[3][lane] = valid ? sxy[l] * inv - mx * my : 0.0;
-        cov[4][lane] = valid ? sxz[l] * inv - mx * mz : 0.0;
-        cov[5][lane] = valid ? syz[l] * inv - my * mz : 0.0;
-        trace[lane] = valid ? tr : 2.0;
-        used[lane] = valid ? 1.0 : 0.0;
+        const double dx = px[j] - qx[l], dy = py[j] - qy[l], dz = pz[j] - qz[l];
+        const double v = (dx * dx + dy * dy + dz * dz) * ih2[j];
+        e[j * query_lanes + l] = v;
+        min_e[l] = v < min_e[l] ? v : min_e[l];
       }
     }
-    batched_smallest_eigenvectors(cov, trace, used, normal, found);
-    for (int l = 0; l < eigen_lanes && first + l < m; ++l) {
+    // Sums relative to each query, as fit_weighted_plane takes them.
+    alignas(32) double sw[query_lanes] = {}, sx[query_lanes] = {}, sy[query_lanes] = {}, sz[query_lanes] = {},
+                       sxx[query_lanes] = {}, syy[query_lanes] = {}, szz[query_lanes] = {}, sxy[query_lanes] = {},
+                       sxz[query_lanes] = {}, syz[query_lanes] = {};
+    for (int j = 0; j < k; ++j) {
+#pragma omp simd
+      for (int l = 0; l < query_lanes; ++l) {
+        double w = exp_nonpositive(min_e[l] - e[j * query_lanes + l]);
+        w = w > weight_floor ? w : weight_floor;
+        const double dx = px[j] - qx[l], dy = py[j] - qy[l], dz = pz[j] - qz[l];
+        const double wx = w * dx, wy = w * dy, wz = w * dz;
+        sw[l] += w; sx[l] += wx; sy[l] += wy; sz[l] += wz;
+        sxx[l] += wx * dx; syy[l] += wy * dy; szz[l] += wz * dz;
+        sxy[l] += wx * dy; sxz[l] += wx * dz; syz[l] += wy * dz;
+      }
+    }
+    for (int l = 0; l < query_lanes; ++l) {
       const int i = first + l;
-      ok[i] = found[l] != 0.0;
-      for (int j = 0; j < 3; ++j) normals[3 * i + j] = normal[j][l];
+      covariance_from_sums(sw[l], sx[l], sy[l], sz[l], sxx[l], syy[l], szz[l], sxy[l], sxz[l], syz[l], cov + 6 * i,
+                           trace[i], valid[i]);
     }
+  }
+  // The rest one at a time, lanes over neighbours (clusters with a single query, as in the
+  // consistency iteration, all go this way).
+  for (int i = grouped; i < m; ++i) {
+    const double qx = queries[3 * i], qy = queries[3 * i + 1], qz = queries[3 * i + 2];
+    double min_e = std::numeric_limits<double>::infinity();
+#pragma omp simd reduction(min : min_e)
+    for (int j = 0; j < k; ++j) {
+      const double dx = px[j] - qx, dy = py[j] - qy, dz = pz[j] - qz;
+      e[j] = (dx * dx + dy * dy + dz * dz) * ih2[j];
+      min_e = e[j] < min_e ? e[j] : min_e;
+    }
+    double sw = 0, sx = 0, sy = 0, sz = 0, sxx = 0, syy = 0, szz = 0, sxy = 0, sxz = 0, syz = 0;
+#pragma omp simd reduction(+ : sw, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz)
+    for (int j = 0; j < k; ++j) {
+      double w = exp_nonpositive(min_e - e[j]);
+      w = w > weight_floor ? w : weight_floor;
+      const double dx = px[j] - qx, dy = py[j] - qy, dz = pz[j] - qz;
+      const double wx = w * dx, wy = w * dy, wz = w * dz;
+      sw += w; sx += wx; sy += wy; sz += wz;
+      sxx += wx * dx; syy += wy * dy; szz += wz * dz;
+      sxy += wx * dy; sxz += wx * dz; syz += wy * dz;
+    }
+    covariance_from_sums(sw, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz, cov + 6 * i, trace[i], valid[i]);
   }
 }
 

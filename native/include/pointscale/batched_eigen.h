@@ -91,4 +91,9 @@ __attribute__((always_inline)) inline void batched_smallest_eigenvectors(const d
   }
 }
 
+// The same, compiled for the best SIMD target of the machine (simd_clones.h), for callers
+// that are not themselves.
+void solve_eigen_batch(const double (&cov)[6][eigen_lanes], const double (&trace)[eigen_lanes],
+                       const double (&used)[eigen_lanes], double (&normal)[3][eigen_lanes], double (&ok)[eigen_lanes]);
+
 }  // namespace pointscale
