@@ -51,3 +51,18 @@ def test_estimated_normals_point_outward_on_a_closed_shape():
     n = ps.estimate_normals(points)
     assert np.allclose(np.linalg.norm(n, axis=1), 1.0)
     assert (np.einsum("ij,ij->i", n, points) > 0).all()
+
+
+def test_reused_neighbours_are_those_of_a_fresh_query():
+    # A batch of points shares kd-tree queries (each point's candidates serve the next ones
+    # while a containment test proves they hold its k nearest); a point projected alone gets a
+    # fresh query of its own. The neighbours, and so the projections, must be the same (up to
+    # the order of summation).
+    rng = np.random.default_rng(3)
+    onto = ps.shapes.bumpy_sphere(5000, noise=0.003)
+    dense = ps.shapes.bumpy_sphere(80000)
+    patch = dense[np.argsort(np.linalg.norm(dense - dense[0], axis=1))[:300]]  # 16x denser than onto
+    points = patch * (1 + 0.01 * rng.standard_normal((len(patch), 1)))
+    together, _ = ps.project(points, onto)
+    alone = np.vstack([ps.project(p[None, :], onto)[0] for p in points])
+    assert np.abs(together - alone).max() < 1e-12

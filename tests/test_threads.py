@@ -72,3 +72,14 @@ def test_an_exception_in_the_callback_propagates(big):
 
     with pytest.raises(RuntimeError, match="from the callback"):
         ps.decompose(big[:50000], levels=3, progress=boom)
+
+
+def test_results_do_not_depend_on_the_thread_count():
+    # Work is split into the same chunks whatever the thread count, and nothing a chunk
+    # computes depends on another: the decompositions agree to the last bit.
+    points = ps.shapes.bumpy_sphere(60000, noise=0.002)
+    one = ps.decompose(points, levels=4, threads=1)
+    two = ps.decompose(points, levels=4, threads=2)
+    assert np.array_equal(one.details, two.details)
+    assert np.array_equal(one.base, two.base)
+    assert np.array_equal(ps.reconstruct(one), ps.reconstruct(two))
