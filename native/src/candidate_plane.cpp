@@ -27,8 +27,8 @@ PlaneFit fit_nearest_plane(CandidateSet& c, int k, const Vec3& foot, double& nea
     const double dx = px[j] - fx, dy = py[j] - fy, dz = pz[j] - fz;
     r2[j] = dx * dx + dy * dy + dz * dz;
   }
-  // The candidates come sorted by distance from the projected point, and the foot moves little:
-  // usually the first k are still the k nearest, which one max and one min confirm.
+  // The candidates come sorted by distance from their query's centre, which is usually near
+  // the foot: then the first k are still the k nearest, which one max and one min confirm.
   double inner = 0.0, outer = std::numeric_limits<double>::infinity();
   for (int j = 0; j < k; ++j) inner = r2[j] > inner ? r2[j] : inner;
   for (int j = k; j < n; ++j) outer = r2[j] < outer ? r2[j] : outer;

@@ -1,7 +1,7 @@
 // One iteration of the MLS projection (mls_projection.h) against a fixed candidate set: the
-// weighted plane (Eq. 2-3) of the k candidates nearest to the current foot point. A point
-// queries its candidates once; the foot then moves by a fraction of the spacing per iteration,
-// so the candidates are gathered once, structure-of-arrays and relative to the projected
+// weighted plane (Eq. 2-3) of the k candidates nearest to the current foot point. One kd-tree
+// query serves a point's iterations (and often the next points, mls_projection.cpp), so the
+// candidates are gathered once per point, structure-of-arrays and relative to the projected
 // point, and every iteration is a few vectorised passes over them.
 #pragma once
 #include <vector>
