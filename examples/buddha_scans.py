@@ -50,11 +50,7 @@ def main(argv=None):
     st.frame(np.vstack([points[::20], filtered[::20]]), direction=(0.25, 1.0, -0.05))
     spacing = 2.0 / 0.2 * 0.00025 * (np.sqrt(10) if args.quick else 1.0)  # ~0.25 mm scan spacing
     cloud = st.points(points, 0.75 * spacing, "Scans")
-    panels = []
-    for p in (levels[-1], levels[2], levels[1], levels[0], filtered):
-        st.set_points(cloud, p)
-        panels.append(st.render([cloud]))
-        C.log(f"panel {len(panels)}/5")
+    panels = st.render_shapes(cloud, (levels[-1], levels[2], levels[1], levels[0], filtered))
     labels = ["raw scans (P3)", "P2", "P1", "P0", f"gains {tuple(int(g) for g in GAINS)}"]
     C.save(args, "buddha_scans", C.tile(panels, labels, quick=args.quick))
     C.finish(args, "buddha_scans", numbers)

@@ -308,6 +308,16 @@ class Studio:
         obj.data.vertices.foreach_set("co", np.asarray(points, dtype=np.float32).reshape(-1))
         obj.data.update()
 
+    def render_shapes(self, obj, shapes) -> list:
+        """One panel per shape: obj's vertices moved to each (n, 3) shape in turn, then rendered alone."""
+        shapes = list(shapes)
+        panels = []
+        for s in shapes:
+            self.set_points(obj, s)
+            panels.append(self.render([obj]))
+            log(f"panel {len(panels)}/{len(shapes)}")
+        return panels
+
     # --- camera and lights
     def frame(self, points, direction=(0.0, -1.0, 0.0), up=(0.0, 0.0, 1.0), lens=60.0, margin=1.06,
               shift=(0.0, 0.0)):

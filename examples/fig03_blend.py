@@ -34,11 +34,7 @@ def main(argv=None):
     st = C.Studio(args.quick, 160, 160)
     st.frame(np.vstack([p1, p2]), direction=(0.6, 1.0, -0.25))
     obj = st.mesh(points, faces, "Bunny")
-    panels = []
-    for b in blends:
-        st.set_points(obj, b)
-        panels.append(st.render([obj]))
-        C.log(f"panel {len(panels)}/{len(TS)}")
+    panels = st.render_shapes(obj, blends)
     labels = [f"t = {t:g}" + (" (P1)" if t == 1 else " (P2)" if t == 2 else "") for t in TS]
     C.save(args, "fig03_blend", C.tile(panels, labels, quick=args.quick))
     C.finish(args, "fig03_blend", numbers)

@@ -167,11 +167,7 @@ def main(argv=None):
 
     st.frame(np.vstack([points, single, multi]), direction=(0.2, 1.0, -0.5), lens=50, margin=1.0)
     obj = st.mesh(points, faces, "Relief", smooth=False)
-    panels = []
-    for shape in (points, single, multi):
-        st.set_points(obj, shape)
-        panels.append(st.render([obj]))
-        C.log(f"panel {len(panels)}/3")
+    panels = st.render_shapes(obj, (points, single, multi))
     labels = ["(a) original relief",
               f"(b) single-scale: letters lean up to {a_single.max():.0f} deg",
               f"(c) multiscale: letters lean at most {a_multi.max():.1f} deg"]

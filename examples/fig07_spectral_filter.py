@@ -33,11 +33,7 @@ def main(argv=None):
     st = C.Studio(args.quick, 200, 250)
     st.frame(np.vstack([levels[0], levels[-1]] + filtered), direction=(0.45, 1.0, -0.05))
     obj = st.mesh(points, faces, "Max Planck")
-    panels = []
-    for p in list(levels) + filtered:
-        st.set_points(obj, p)
-        panels.append(st.render([obj]))
-        C.log(f"panel {len(panels)}/8")
+    panels = st.render_shapes(obj, list(levels) + filtered)
     labels = [f"P{l}" for l in range(4)] + [f"gains {g}" for g in GAINS]
     C.save(args, "fig07_spectral_filter", C.tile(panels, labels, cols=4, quick=args.quick))
     C.finish(args, "fig07_spectral_filter", numbers)

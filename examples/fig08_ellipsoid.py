@@ -37,11 +37,7 @@ def main(argv=None):
     st = C.Studio(args.quick, 160, 200)
     st.frame(np.vstack(shapes), direction=(0.45, 1.0, -0.05))
     obj = st.mesh(points, faces, "Max Planck")
-    panels = []
-    for s in shapes:
-        st.set_points(obj, s)
-        panels.append(st.render([obj]))
-        C.log(f"panel {len(panels)}/{len(GAINS)}")
+    panels = st.render_shapes(obj, shapes)
     labels = [f"detail x {g:g}" for g in GAINS]
     C.save(args, "fig08_ellipsoid", C.tile(panels, labels, quick=args.quick))
     C.finish(args, "fig08_ellipsoid", numbers)

@@ -84,11 +84,7 @@ def main(argv=None):
     st = C.Studio(args.quick, 160, 200)
     st.frame(np.vstack(shapes), direction=(0.3, 1.0, -0.05))
     obj = st.mesh(a, faces, "Morph")
-    panels = []
-    for s in shapes:
-        st.set_points(obj, s)
-        panels.append(st.render([obj]))
-        C.log(f"panel {len(panels)}/{len(STEPS)}")
+    panels = st.render_shapes(obj, shapes)
     labels = [f"({al:g}, {be:g})" for al, be in STEPS]
     C.save(args, "fig09_morph", C.tile(panels, labels, quick=args.quick))
     C.finish(args, "fig09_morph", numbers)

@@ -19,11 +19,7 @@ def main(argv=None):
     st = C.Studio(args.quick, 200, 250)
     st.frame(np.vstack(shapes), direction=(0.3, 1.0, -0.05))
     obj = st.mesh(a, faces, "Blend")
-    panels = []
-    for s in shapes:
-        st.set_points(obj, s)
-        panels.append(st.render([obj]))
-        C.log(f"panel {len(panels)}/{len(STEPS)}")
+    panels = st.render_shapes(obj, shapes)
     labels = ["Igea (1, 0)", "Max Planck (0, 1)", "both details (1, 1)"]
     C.save(args, "fig10a_blend", C.tile(panels, labels, quick=args.quick))
     C.finish(args, "fig10a_blend", numbers)

@@ -113,6 +113,16 @@ def same(a, b):
     return True
 
 
+def assert_refused(obj, operator: str, match: str, **kwargs):
+    """bpy.ops.pointscale.<operator> raises a report matching `match` and leaves obj untouched."""
+    import pytest
+
+    before = snapshot(obj)
+    with pytest.raises(RuntimeError, match=match):
+        getattr(bpy.ops.pointscale, operator)(**kwargs)
+    assert same(before, snapshot(obj))
+
+
 def noisy_sphere(n=4000, seed=0):
     import pointscale as ps
 
