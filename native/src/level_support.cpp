@@ -67,10 +67,8 @@ Points normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offs
                   const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
   const int k = support.neighbors;
   const bool has_reference = reference.rows() > 0;
-  // A floor on the weights keeps the fit well conditioned where one anchor dominates (a query
-  // far from the others, as at raw-scan outliers): the normal must be a smooth function of the
-  // anchors, since reconstruction re-evaluates it.
-  constexpr double weight_floor = 1e-6;
+  // Weights floored (plane_fit.h): the normal must be a smooth function of the anchors, since
+  // reconstruction re-evaluates it, also at outliers far from them.
   const ClusterMembers groups = group_by_cluster(query_labels, n, support.clusters);
   Points normals(n, 3);
   const std::size_t clusters = static_cast<std::size_t>(support.clusters);

@@ -36,7 +36,7 @@ RayHits shoot_rays(const Points& origins, const Points& directions, const Spatia
         const Vec3 x = o + t * d;
         const int found = support.knn(x.data(), k, idx.data(), d2.data());
         for (int j = 0; j < found; ++j) ih2[j] = inv_h2(idx[j]);
-        gaussian_weights(d2.data(), ih2.data(), found, w.data());
+        floored_gaussian_weights(d2.data(), ih2.data(), found, w.data());
         const PlaneFit fit = fit_weighted_plane(s, idx.data(), w.data(), found, x);
         if (!fit.ok) break;
         const double cosine = fit.normal.dot(d);
@@ -62,7 +62,7 @@ RayHits shoot_rays(const Points& origins, const Points& directions, const Spatia
           const Vec3 x = o + tt * d;
           const int found = support.knn(x.data(), k, idx.data(), d2.data());
           for (int j = 0; j < found; ++j) ih2[j] = inv_h2(idx[j]);
-          gaussian_weights(d2.data(), ih2.data(), found, w.data());
+          floored_gaussian_weights(d2.data(), ih2.data(), found, w.data());
           const PlaneFit fit = fit_weighted_plane(s, idx.data(), w.data(), found, x);
           ok = fit.ok && std::abs(fit.normal.dot(d)) >= options.min_cosine;
           return ok ? (x - fit.mean).dot(fit.normal.dot(d) > 0 ? fit.normal : Vec3(-fit.normal)) : 0.0;

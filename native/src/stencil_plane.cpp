@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "pointscale/fast_exp.h"
+#include "pointscale/plane_fit.h"
 #include "pointscale/simd_clones.h"
 
 namespace pointscale {
@@ -23,16 +24,17 @@ void PlaneStencil::assign(const Points& points, const Index* nb, int k, const Ei
 
 namespace {
 
-// The covariance from the sums, as plane_from_sums forms it (up to rounding).
+// The covariance from the sums, as plane_from_sums forms it, written as six entries.
 inline void covariance_from_sums(double sw, double sx, double sy, double sz, double sxx, double syy, double szz,
                                  double sxy, double sxz, double syz, double* cov, double& trace, double& valid) {
-  const bool weighed = sw > 0.0;
-  const double inv = 1.0 / (weighed ? sw : 1.0);
-  const double mx = sx * inv, my = sy * inv, mz = sz * inv;
-  cov[0] = sxx * inv - mx * mx; cov[1] = syy * inv - my * my; cov[2] = szz * inv - mz * mz;
-  cov[3] = sxy * inv - mx * my; cov[4] = sxz * inv - mx * mz; cov[5] = syz * inv - my * mz;
-  trace = cov[0] + cov[1] + cov[2];
-  valid = weighed && trace > 0.0 ? 1.0 : 0.0;
+  valid = 0.0;
+  if (!(sw > 0.0)) return;
+  Vec3 m;
+  Mat3 c;
+  moments_from_sums(sw, Vec3(sx, sy, sz), sxx, syy, szz, sxy, sxz, syz, m, c);
+  cov[0] = c(0, 0); cov[1] = c(1, 1); cov[2] = c(2, 2); cov[3] = c(0, 1); cov[4] = c(0, 2); cov[5] = c(1, 2);
+  trace = c.trace();
+  valid = trace > 0.0 ? 1.0 : 0.0;
 }
 
 }  // namespace

@@ -28,6 +28,17 @@ inline void gaussian_weights(const double* d2, const double* inv_h2, int count, 
   for (int j = 0; j < count; ++j) weights[j] = std::exp(min_e - d2[j] * inv_h2[j]);
 }
 
+// A floor on the scaled weights keeps a fit well conditioned where one point dominates: a
+// query far from all the others (raw-scan outliers, a ray's origin several kernel widths off
+// the surface) otherwise fits a plane to little more than one point, whose normal is noise.
+constexpr double weight_floor = 1e-6;
+
+// gaussian_weights, each raised to at least weight_floor.
+inline void floored_gaussian_weights(const double* d2, const double* inv_h2, int count, double* weights) {
+  gaussian_weights(d2, inv_h2, count, weights);
+  for (int j = 0; j < count; ++j) weights[j] = std::max(weights[j], weight_floor);
+}
+
 // 2^-e for x = m 2^e with m in [1, 2): an exact rescaling to [1, 2). x must be positive and normal.
 inline double inverse_power_of_two(double x) {
   const std::uint64_t exponent = (__builtin_bit_cast(std::uint64_t, x) >> 52) & 0x7ff;
@@ -91,16 +102,25 @@ inline Vec3 smallest_eigenvector(const Mat3& c, double trace) {
   return detail::dominant_by_squaring(a);
 }
 
-// The plane from the weighted sums over points taken relative to `reference`: w_sum = sum w,
-// s = sum w d, sxx.. = sum w d d^T (the six distinct entries).
+// The weighted mean m (relative to where the sums were taken) and covariance c from the sums
+// w_sum = sum w, s = sum w d, sxx.. = sum w d d^T (the six distinct entries); w_sum > 0.
+inline void moments_from_sums(double w_sum, const Vec3& s, double sxx, double syy, double szz, double sxy,
+                              double sxz, double syz, Vec3& m, Mat3& c) {
+  const double inv = 1.0 / w_sum;
+  m = s * inv;
+  c << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
+  c = c * inv - m * m.transpose();
+}
+
+// The plane from the weighted sums over points taken relative to `reference`
+// (moments_from_sums).
 inline PlaneFit plane_from_sums(double w_sum, const Vec3& s, double sxx, double syy, double szz, double sxy,
                                 double sxz, double syz, const Vec3& reference) {
   PlaneFit fit;
   if (!(w_sum > 0.0)) return fit;
-  const Vec3 m = s / w_sum;
+  Vec3 m;
   Mat3 cov;
-  cov << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
-  cov = cov / w_sum - m * m.transpose();
+  moments_from_sums(w_sum, s, sxx, syy, szz, sxy, sxz, syz, m, cov);
   fit.mean = reference + m;
   const double trace = cov.trace();
   if (!(trace > 0.0)) return fit;
