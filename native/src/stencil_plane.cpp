@@ -27,14 +27,11 @@ namespace {
 // The covariance from the sums, as plane_from_sums forms it, written as six entries.
 inline void covariance_from_sums(double sw, double sx, double sy, double sz, double sxx, double syy, double szz,
                                  double sxy, double sxz, double syz, double* cov, double& trace, double& valid) {
-  valid = 0.0;
-  if (!(sw > 0.0)) return;
-  Vec3 m;
-  Mat3 c;
-  moments_from_sums(sw, Vec3(sx, sy, sz), sxx, syy, szz, sxy, sxz, syz, m, c);
-  cov[0] = c(0, 0); cov[1] = c(1, 1); cov[2] = c(2, 2); cov[3] = c(0, 1); cov[4] = c(0, 2); cov[5] = c(1, 2);
-  trace = c.trace();
-  valid = trace > 0.0 ? 1.0 : 0.0;
+  const bool weighed = sw > 0.0;
+  double m[3];
+  moments_from_sums(weighed ? sw : 1.0, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz, m, cov);
+  trace = cov[0] + cov[1] + cov[2];
+  valid = weighed && trace > 0.0 ? 1.0 : 0.0;
 }
 
 }  // namespace

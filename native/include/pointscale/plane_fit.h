@@ -102,14 +102,15 @@ inline Vec3 smallest_eigenvector(const Mat3& c, double trace) {
   return detail::dominant_by_squaring(a);
 }
 
-// The weighted mean m (relative to where the sums were taken) and covariance c from the sums
-// w_sum = sum w, s = sum w d, sxx.. = sum w d d^T (the six distinct entries); w_sum > 0.
-inline void moments_from_sums(double w_sum, const Vec3& s, double sxx, double syy, double szz, double sxy,
-                              double sxz, double syz, Vec3& m, Mat3& c) {
+// The weighted mean m (relative to where the sums were taken) and covariance c (entries xx,
+// yy, zz, xy, xz, yz) from the sums w_sum = sum w, s.. = sum w d, s.. = sum w d d^T; w_sum > 0.
+// Plain scalars and no branch, so that it stays cheap inside the vectorised kernels.
+inline void moments_from_sums(double w_sum, double sx, double sy, double sz, double sxx, double syy, double szz,
+                              double sxy, double sxz, double syz, double* m, double* c) {
   const double inv = 1.0 / w_sum;
-  m = s * inv;
-  c << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
-  c = c * inv - m * m.transpose();
+  m[0] = sx * inv; m[1] = sy * inv; m[2] = sz * inv;
+  c[0] = sxx * inv - m[0] * m[0]; c[1] = syy * inv - m[1] * m[1]; c[2] = szz * inv - m[2] * m[2];
+  c[3] = sxy * inv - m[0] * m[1]; c[4] = sxz * inv - m[0] * m[2]; c[5] = syz * inv - m[1] * m[2];
 }
 
 // The plane from the weighted sums over points taken relative to `reference`
@@ -118,9 +119,11 @@ inline PlaneFit plane_from_sums(double w_sum, const Vec3& s, double sxx, double 
                                 double sxz, double syz, const Vec3& reference) {
   PlaneFit fit;
   if (!(w_sum > 0.0)) return fit;
-  Vec3 m;
+  double mm[3], c[6];
+  moments_from_sums(w_sum, s.x(), s.y(), s.z(), sxx, syy, szz, sxy, sxz, syz, mm, c);
+  const Vec3 m(mm[0], mm[1], mm[2]);
   Mat3 cov;
-  moments_from_sums(w_sum, s, sxx, syy, szz, sxy, sxz, syz, m, cov);
+  cov << c[0], c[3], c[4], c[3], c[1], c[5], c[4], c[5], c[2];
   fit.mean = reference + m;
   const double trace = cov.trace();
   if (!(trace > 0.0)) return fit;
