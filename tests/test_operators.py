@@ -58,12 +58,21 @@ def test_diffusion_levels_get_smoother_level_by_level():
     assert min(coarse) > 0.8 * 0.08, f"the coarse shape should survive: {coarse}"
 
 
+def assert_fine_pattern_fades_level_by_level(fine):
+    """fine: the fine pattern's amplitude per level, coarsest first. Each level has less of it
+    than the next, until it is gone (below 1% of the input's): there the two coarsest levels
+    differ by rounding noise only."""
+    gone = 0.01 * fine[-1]
+    assert all(a < b or max(a, b) < gone for a, b in zip(fine, fine[1:])), f"fine amplitude per level {fine}"
+    assert fine[1] < gone, f"fine amplitude per level {fine}"
+
+
 def test_diffusion_smoother_in_a_decomposition_gets_smoother_level_by_level():
     p = ps.shapes.bumpy_sphere(20000, fine_frequency=40.0)
     dec = ps.decompose_rayshoot(p, 4, smoother="diffusion")
     assert dec.settings["smoother"] == "diffusion"
     fine = [abs(radial_amplitudes(dec.level(l), [3.0, 40.0])[1]) for l in range(dec.n_levels)]
-    assert all(a < b for a, b in zip(fine, fine[1:])), f"fine amplitude per level {fine}"
+    assert_fine_pattern_fades_level_by_level(fine)
     # Diffusion smooths more than the projection alone, band for band.
     plain = ps.decompose_rayshoot(p, 4, smoother="mls")
     assert abs(radial_amplitudes(dec.level(0), [3.0, 40.0])[0]) < radial_amplitudes(plain.level(0), [3.0, 40.0])[0]
@@ -344,7 +353,7 @@ def test_decompose_diffusion_smoother_round_trip_and_smoother_levels():
     assert dec.settings["smoother"] == "diffusion"
     np.testing.assert_allclose(ps.reconstruct(dec), p, atol=1e-9)
     fine = [abs(radial_amplitudes(dec.level(l), [3.0, 40.0])[1]) for l in range(dec.n_levels)]
-    assert all(a < b for a, b in zip(fine, fine[1:])), f"fine amplitude per level {fine}"
+    assert_fine_pattern_fades_level_by_level(fine)
     plain = ps.decompose(p, 4)
     assert radial_amplitudes(dec.level(0), [3.0, 40.0])[0] < radial_amplitudes(plain.level(0), [3.0, 40.0])[0]
 
