@@ -36,10 +36,11 @@ struct Consistency {
 // position (no detail in this band; the coarser bands carry it). Then every other point is made
 // consistent in one step, since its normal no longer depends on it: exact by construction.
 // anchor_reference #C by 3 orients the anchors' normals during the iteration. Writes each
-// point's detail along its unoriented normal (the eigenvector's own sign) to details[0..n).
+// point's detail along its unoriented normal (the eigenvector's own sign) to details[0..n),
+// and those normals to `normals`.
 Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSupport& support,
                                 const Points& anchor_reference, double scale, int max_iterations,
-                                const ProgressStage& stage, double* details) {
+                                const ProgressStage& stage, double* details, Points& normals) {
   const double stop = 1e-12 * scale;
   const Index c_count = support.clusters;
   const int k = support.neighbors;
@@ -111,7 +112,7 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
   }
   // Unoriented: the move below does not depend on the sign, and decompose orients the
   // normals (and flips these details with them) once level 0 is known.
-  const Points normals = level_normals(level, support, Points());
+  normals = level_normals(level, support, Points());
   std::vector<unsigned char> is_anchor(static_cast<std::size_t>(level.rows()), 0);
   for (Index a : support.anchors) is_anchor[a] = 1;
   parallel_for(static_cast<std::size_t>(level.rows()), [&](std::size_t b, std::size_t e) {
@@ -141,12 +142,14 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   model.support.resize(k);
   model.reports.resize(k);
   // Only the level being built and the one it comes from are held; a finished level keeps its
-  // anchors (all its normals need) and its detail along the unoriented normals.
+  // detail along its unoriented normals, and how those turn against the next level's.
   Points fine = std::move(points);
-  std::vector<Points> anchors(k);
+  Points anchors0;  // level 0's anchors, which orient it
   model.details.resize(k, n);
   // Every level keeps the input's point order, so one spatial order serves all projections.
   IndexList order = morton_order(fine);
+  Points finer_normals;  // unoriented normals of the level built last
+  std::vector<std::vector<signed char>> turns(k);  // turns[l]: sign of n_l . n_{l-1} per point
   MlsOptions mls = options.mls;
   mls.order = &order;
 
@@ -183,11 +186,27 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
 
     Points coarse = std::move(projected.positions);
     Eigen::VectorXd band(n);
+    Points normals;
     const Consistency consistency = make_offsets_normal(fine, coarse, support, anchor_reference, scale,
                                                         options.consistency_iterations, stage.sub(0.8, 1.0),
-                                                        band.data());
+                                                        band.data(), normals);
     model.details.row(l - 1) = band.transpose();
-    anchors[l - 1] = support_centroids(coarse, support);
+    // How this level's normals turn against the finer level's (above it), point by point: all
+    // that orienting the finer one needs once this one is oriented, so the normals of a level
+    // are not held, nor computed again, after the next step.
+    if (step > 0) {
+      std::vector<signed char>& turn = turns[l];
+      turn.resize(static_cast<std::size_t>(n));
+      parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+        for (std::size_t ii = b; ii < e; ++ii) {
+          const auto i = static_cast<Eigen::Index>(ii);
+          const double d = finer_normals.row(i).dot(normals.row(i));
+          turn[ii] = static_cast<signed char>((d > 0.0) - (d < 0.0));
+        }
+      }, {}, 4096);
+    }
+    finer_normals = std::move(normals);
+    if (l == 1) anchors0 = support_centroids(coarse, support);
     fine = std::move(coarse);
     LevelReport& report = model.reports[l - 1];
     report.support_points = static_cast<std::size_t>(support.clusters);
@@ -209,7 +228,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   if (input_normals) {
     reference0 = *input_normals;
   } else {
-    const Points& c0 = anchors[0];
+    const Points& c0 = anchors0;
     std::vector<Index> own(static_cast<std::size_t>(s0.clusters));
     for (Index c = 0; c < s0.clusters; ++c) own[c] = c;
     Points cn = support_normals(c0, own.data(), c0, s0, Points::Zero(s0.clusters, 3));
@@ -218,18 +237,24 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   }
   last.report(0.5);
   // Orient each level's normals like support_normals does with a reference (flip where
-  // n . reference < 0), and flip the details with them, so detail x normal is unchanged.
-  Points reference = std::move(reference0);
-  for (int l = 0; l < k; ++l) {
-    Points normals = anchor_normals(anchors[l], model.support[l], Points());
+  // n . reference < 0), and flip the details with them, so detail x normal is unchanged. Level
+  // 0's normals are the ones built last; each finer level flips where its turn against the
+  // oriented level below is negative, which is the sign of n_l . n_{l-1} (negating a vector
+  // negates a dot product exactly, so this is the very test reconstruction makes).
+  Points& normals0 = finer_normals;
+  std::vector<unsigned char> flipped(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    flipped[i] = normals0.row(i).dot(reference0.row(i)) < 0.0;
+    if (flipped[i]) { normals0.row(i) = -normals0.row(i); model.details(0, i) = -model.details(0, i); }
+  }
+  model.base_normals = std::move(normals0);
+  for (int l = 1; l < k; ++l) {
     for (Eigen::Index i = 0; i < n; ++i) {
-      if (normals.row(i).dot(reference.row(i)) < 0.0) {
-        normals.row(i) = -normals.row(i);
-        model.details(l, i) = -model.details(l, i);
-      }
+      const int turn = turns[l][i];
+      flipped[i] = flipped[i] ? turn > 0 : turn < 0;
+      if (flipped[i]) model.details(l, i) = -model.details(l, i);
     }
-    if (l == 0) model.base_normals = normals;
-    reference = std::move(normals);
+    std::vector<signed char>().swap(turns[l]);
   }
   model.base = std::move(fine);
   last.report(1.0);
