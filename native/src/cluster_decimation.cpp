@@ -27,8 +27,6 @@ struct Cluster {
 struct Working {
   std::vector<double> xyz;  // 3 per point
   std::vector<Index> index;
-  std::vector<double> scratch_xyz;  // as large; a split uses the same range of it
-  std::vector<Index> scratch_index;
 };
 
 // First and second moments about a reference point, the second as its six distinct entries.
@@ -70,33 +68,30 @@ Cluster whole(const Working& w, double max_variation) {
   return c;
 }
 
-// Splits c through its centroid along its axis. The points go to the scratch arrays, those
-// below from the front and the others from the back, without a branch (which side is a coin
-// toss, and mispredicting it cost most of the time), then back, summed on the way about c's
-// centroid. Returns false, and marks c unsplittable, when every point falls on one side.
+// Splits c through its centroid along its axis, in place and without a branch (which side a
+// point falls on is a coin toss, and mispredicting it cost most of the time): each point is
+// swapped with the first point not known to be below, which then advances past it if it is
+// below. Then both halves are summed about c's centroid. Returns false, and marks c
+// unsplittable, when every point falls on one side.
 bool split(Cluster& c, Working& w, std::deque<Cluster>& store, double max_variation) {
   const Vec3 o = c.centroid;
   const Vec3 axis = c.axis;
   double* x = w.xyz.data();
   Index* idx = w.index.data();
-  double* tx = w.scratch_xyz.data();
-  Index* ti = w.scratch_index.data();
-  std::size_t lo = c.begin, hi = c.end;  // next slot from the front, one past the next from the back
+  std::size_t lo = c.begin;  // [begin, lo) below, [lo, i) not below
   for (std::size_t i = c.begin; i < c.end; ++i) {
     const double px = x[3 * i], py = x[3 * i + 1], pz = x[3 * i + 2];
-    const std::size_t below = (px - o.x()) * axis.x() + (py - o.y()) * axis.y() + (pz - o.z()) * axis.z() < 0.0;
-    const std::size_t to = below * lo + (1 - below) * (hi - 1);
-    tx[3 * to] = px; tx[3 * to + 1] = py; tx[3 * to + 2] = pz;
-    ti[to] = idx[i];
-    lo += below;
-    hi -= 1 - below;
+    const Index pi = idx[i];
+    x[3 * i] = x[3 * lo]; x[3 * i + 1] = x[3 * lo + 1]; x[3 * i + 2] = x[3 * lo + 2];
+    idx[i] = idx[lo];
+    x[3 * lo] = px; x[3 * lo + 1] = py; x[3 * lo + 2] = pz;
+    idx[lo] = pi;
+    lo += (px - o.x()) * axis.x() + (py - o.y()) * axis.y() + (pz - o.z()) * axis.z() < 0.0;
   }
   if (lo == c.begin || lo == c.end) { c.splittable = false; return false; }
   Moments below_sums, above_sums;
-  for (std::size_t i = c.begin; i < lo; ++i) below_sums.add(&tx[3 * i], o);
-  for (std::size_t i = lo; i < c.end; ++i) above_sums.add(&tx[3 * i], o);
-  std::copy(tx + 3 * c.begin, tx + 3 * c.end, x + 3 * c.begin);
-  std::copy(ti + c.begin, ti + c.end, idx + c.begin);
+  for (std::size_t i = c.begin; i < lo; ++i) below_sums.add(&x[3 * i], o);
+  for (std::size_t i = lo; i < c.end; ++i) above_sums.add(&x[3 * i], o);
   Cluster* a = &store.emplace_back(Cluster{c.begin, lo, Vec3::Zero(), Vec3::Zero(), 0.0, false});
   Cluster* b = &store.emplace_back(Cluster{lo, c.end, Vec3::Zero(), Vec3::Zero(), 0.0, false});
   describe(*a, o, static_cast<double>(lo - c.begin), below_sums, max_variation);
@@ -167,8 +162,6 @@ Clustering cluster_decimate(const Points& points, std::size_t target, double max
   w.xyz.assign(points.data(), points.data() + 3 * n);
   w.index.resize(n);
   for (std::size_t i = 0; i < n; ++i) w.index[i] = static_cast<Index>(i);
-  w.scratch_xyz.resize(3 * n);
-  w.scratch_index.resize(n);
 
   // The split of a cluster depends on its points alone, so the large ones, which nearly all
   // get split, are split ahead of time in parallel subtrees; the best-first order below then

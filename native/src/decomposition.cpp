@@ -36,11 +36,11 @@ struct Consistency {
 // position (no detail in this band; the coarser bands carry it). Then every other point is made
 // consistent in one step, since its normal no longer depends on it: exact by construction.
 // anchor_reference #C by 3 orients the anchors' normals during the iteration. Writes each
-// point's detail along its unoriented normal (the eigenvector's own sign) to details[0..n),
+// point's detail along its unoriented normal (the eigenvector's own sign) to details(i),
 // and those normals to `normals`.
 Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSupport& support,
                                 const Points& anchor_reference, double scale, int max_iterations,
-                                const ProgressStage& stage, double* details, Points& normals) {
+                                const ProgressStage& stage, Eigen::MatrixXd::RowXpr details, Points& normals) {
   const double stop = 1e-12 * scale;
   const Index c_count = support.clusters;
   const int k = support.neighbors;
@@ -121,7 +121,7 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
       const Vec3 nrm = normals.row(i).transpose();
       const Vec3 f = fine.row(i).transpose();
       if (!is_anchor[ii]) level.row(i) = (f - (f - level.row(i).transpose()).dot(nrm) * nrm).transpose();
-      details[ii] = (fine.row(i) - level.row(i)).dot(normals.row(i));
+      details(i) = (fine.row(i) - level.row(i)).dot(normals.row(i));
     }
   });
   stage.report(1.0);
@@ -162,6 +162,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     // Decimate P^l to Q^{l-1}: |Q^{l-1}| = gamma^(step+1) n (Sec. 5.2).
     const auto target = static_cast<std::size_t>(std::floor(std::pow(options.decimation, step + 1) * n));
     Clustering clusters = cluster_decimate(fine, target, options.max_variation);
+    release_free_memory();  // the decimation's working copy
     if (options.diffusion) clusters.centroids = diffuse(clusters.centroids, *options.diffusion);
     stage.report(0.05);
     SpatialIndex q_index(clusters.centroids);
@@ -185,12 +186,11 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     projected.normals = Points();
 
     Points coarse = std::move(projected.positions);
-    Eigen::VectorXd band(n);
+    if (l == 1) IndexList().swap(order);  // the last projection is done; the peak comes next
     Points normals;
     const Consistency consistency = make_offsets_normal(fine, coarse, support, anchor_reference, scale,
                                                         options.consistency_iterations, stage.sub(0.8, 1.0),
-                                                        band.data(), normals);
-    model.details.row(l - 1) = band.transpose();
+                                                        model.details.row(l - 1), normals);
     // How this level's normals turn against the finer level's (above it), point by point: all
     // that orienting the finer one needs once this one is oriented, so the normals of a level
     // are not held, nor computed again, after the next step.
@@ -218,7 +218,6 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     report.pinned = consistency.pinned;
   }
 
-  IndexList().swap(order);  // the peak comes below, in the orientation
   release_free_memory();
   // Orientation: level 0 from the input normals, or by propagation over the level-0 clusters;
   // every finer level agrees with the level below it at the same point (as reconstruction does).
