@@ -63,6 +63,10 @@ def test_other_functions_reject_bad_input(dec):
         ps.reconstruct(GOOD)
     with pytest.raises(ValueError, match="onto"):
         ps.project(GOOD, GOOD[:2])
+    for near, message in [(np.zeros(5, int), "near must be"), (np.full(3000, 0.5), "integers"),
+                          (np.full(3000, 100), r"\[0, 99\]"), (np.full(3000, -1), "index onto")]:
+        with pytest.raises(ValueError, match=message):
+            ps.project(GOOD, GOOD[:100], near=near)
     with pytest.raises(ValueError, match="target"):
         ps.decimate(GOOD, 10**6)
     with pytest.raises(ValueError, match="collinear"):

@@ -66,3 +66,14 @@ def test_reused_neighbours_are_those_of_a_fresh_query():
     together, _ = ps.project(points, onto)
     alone = np.vstack([ps.project(p[None, :], onto)[0] for p in points])
     assert np.abs(together - alone).max() < 1e-12
+    # The same with each point's first query centred on a sample near it (as decompose does
+    # with each point's cluster), here its nearest sample: the points around one sample share
+    # a query while the containment test holds.
+    nearest = np.argmin(((points[:, None, :] - onto[None, :, :]) ** 2).sum(-1), axis=1)
+    assert len(np.unique(nearest)) < len(points) // 4  # so queries are shared
+    grouped, _ = ps.project(points, onto, near=nearest)
+    assert np.abs(grouped - alone).max() < 1e-12
+    # A poor hint, one sample for the whole patch, leaves most points outside what its query
+    # proves; they must fall back to queries of their own, not use its neighbours.
+    one, _ = ps.project(points, onto, near=np.full(len(points), nearest[0]))
+    assert np.abs(one - alone).max() < 1e-12

@@ -12,6 +12,7 @@
 #include "pointscale/parallel.h"
 #include "pointscale/reconstruction.h"
 #include "pointscale/sample_spacing.h"
+#include "pointscale/spatial_order.h"
 
 namespace py = pybind11;
 using namespace pointscale;
@@ -220,12 +221,20 @@ PYBIND11_MODULE(_core, m) {
   });
 
   m.def("project", [](const DoubleArray& points, const DoubleArray& onto, double kernel, int neighbors,
-                      double tolerance, int max_iterations, py::object progress) {
+                      double tolerance, int max_iterations, py::object progress, py::object near) {
     Points x = to_points(points), s = to_points(onto);
     MlsOptions o;
     o.neighbors = neighbors;
     o.tolerance = tolerance;
     o.max_iterations = max_iterations;
+    IndexList near_support, order;
+    if (!near.is_none()) {  // checked by the Python layer: (n,) in [0, #onto)
+      const auto a = near.cast<IndexArray>();
+      near_support.assign(a.data(), a.data() + a.size());
+      order = grouped_by_label(near_support, static_cast<Index>(s.rows()));
+      o.near_support = &near_support;
+      o.order = &order;
+    }
     PythonProgress pp(progress);
     MlsResult r = without_gil([&] {
       SpatialIndex index(s);
@@ -233,7 +242,8 @@ PYBIND11_MODULE(_core, m) {
       return mls_project(x, index, h, o, ProgressStage{pp.get(), 0.0, 1.0});
     });
     return py::make_tuple(r.positions, r.normals, r.not_converged, r.degenerate);
-  });
+  }, py::arg("points"), py::arg("onto"), py::arg("kernel"), py::arg("neighbors"), py::arg("tolerance"),
+     py::arg("max_iterations"), py::arg("progress") = py::none(), py::arg("near") = py::none());
 
   m.def("decimate", [](const DoubleArray& points, std::size_t target, double max_variation) {
     Points p = to_points(points);

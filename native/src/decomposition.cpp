@@ -146,12 +146,8 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   Points fine = std::move(points);
   Points anchors0;  // level 0's anchors, which orient it
   model.details.resize(k, n);
-  // Every level keeps the input's point order, so one spatial order serves all projections.
-  IndexList order = morton_order(fine);
   Points finer_normals;  // unoriented normals of the level built last
   std::vector<std::vector<signed char>> turns(k);  // turns[l]: sign of n_l . n_{l-1} per point
-  MlsOptions mls = options.mls;
-  mls.order = &order;
 
   for (int step = 0; step < k; ++step) {
     const int l = k - step;  // builds level l-1 from level l
@@ -168,8 +164,16 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     SpatialIndex q_index(clusters.centroids);
     const Eigen::VectorXd h = options.kernel * local_spacing(q_index, 6);
 
-    // Project P^l onto the MLS surface of Q^{l-1}.
-    MlsResult projected = mls_project(fine, q_index, h, mls, stage.sub(0.1, 0.8));
+    // Project P^l onto the MLS surface of Q^{l-1}, cluster by cluster, each cluster's points
+    // around one query at its centroid (clusters come in a spatial order).
+    MlsResult projected;
+    {
+      const IndexList order = grouped_by_label(clusters.labels, static_cast<Index>(clusters.centroids.rows()));
+      MlsOptions mls = options.mls;
+      mls.order = &order;
+      mls.near_support = &clusters.labels;
+      projected = mls_project(fine, q_index, h, mls, stage.sub(0.1, 0.8));
+    }
 
     // The level's own support: clusters, their neighbourhoods and kernels.
     LevelSupport& support = model.support[l - 1];
@@ -186,7 +190,6 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     projected.normals = Points();
 
     Points coarse = std::move(projected.positions);
-    if (l == 1) IndexList().swap(order);  // the last projection is done; the peak comes next
     Points normals;
     const Consistency consistency = make_offsets_normal(fine, coarse, support, anchor_reference, scale,
                                                         options.consistency_iterations, stage.sub(0.8, 1.0),

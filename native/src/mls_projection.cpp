@@ -36,8 +36,14 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   // d_k(x) the k-th distance among them: those are then x's k nearest (the ball of radius
   // d_k(x) around x lies inside R). So one query serves the foot while it moves, and, points
   // coming in Morton order, the points after it, until that test fails. The neighbours are
-  // always those of a fresh query.
-  const int kc = std::min<int>(k + 8, support.size());
+  // always those of a fresh query. With a support point near each point (decompose passes each
+  // point's cluster), the query is centred there instead, and serves the points around it:
+  // at 1M points, 446k queries in the three projections of a decomposition, 1.13M in Morton
+  // order.
+  const IndexList* near = options.near_support && options.near_support->size() == static_cast<std::size_t>(n)
+                              ? options.near_support : nullptr;
+  // Centred on a support point, a query must reach past the k nearest of every point around it.
+  const int kc = std::min<int>(near ? k + 16 : k + 8, support.size());
   const bool given = options.order && options.order->size() == static_cast<std::size_t>(n);
   const IndexList own_order = given ? IndexList() : morton_order(x);
   const IndexList& order = given ? *options.order : own_order;
@@ -74,7 +80,8 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
     for (std::size_t t = b; t < e; ++t) {
       const auto i = static_cast<std::size_t>(order[t]);
       const Vec3 p = x.row(static_cast<Eigen::Index>(i)).transpose();
-      if (candidates == 0) query(p);
+      const Vec3 near_at = near ? Vec3(s.row((*near)[i]).transpose()) : p;
+      if (candidates == 0) query(near_at);
       gather(p);
       // The foot and the plane are kept relative to p, as the candidates are.
       Vec3 foot = Vec3::Zero();
@@ -84,7 +91,13 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
       for (int it = 0; it < options.max_iterations; ++it) {
         double nearest_h = 0.0, kth_d2 = 0.0;
         PlaneFit fit = fit_nearest_plane(set, k, foot, nearest_h, kth_d2);
-        if (radius < everything && !((p + foot - centre).norm() + std::sqrt(kth_d2) < radius)) {
+        auto holds = [&] { return radius == everything || (p + foot - centre).norm() + std::sqrt(kth_d2) < radius; };
+        if (!holds() && near && it == 0 && centre != near_at) {
+          query(near_at);
+          gather(p);
+          fit = fit_nearest_plane(set, k, foot, nearest_h, kth_d2);
+        }
+        if (!holds()) {
           query(p + foot);
           gather(p);
           fit = fit_nearest_plane(set, k, foot, nearest_h, kth_d2);

@@ -43,4 +43,13 @@ IndexList morton_order(const Points& points) {
   return order;
 }
 
+IndexList grouped_by_label(const IndexList& labels, Index count) {
+  std::vector<std::size_t> start(static_cast<std::size_t>(count) + 1, 0);
+  for (const Index l : labels) ++start[static_cast<std::size_t>(l) + 1];
+  for (std::size_t c = 0; c < static_cast<std::size_t>(count); ++c) start[c + 1] += start[c];
+  IndexList out(labels.size());
+  for (std::size_t i = 0; i < labels.size(); ++i) out[start[labels[i]]++] = static_cast<Index>(i);
+  return out;
+}
+
 }  // namespace pointscale

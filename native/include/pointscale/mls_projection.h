@@ -22,6 +22,10 @@ struct MlsOptions {
   // The order in which the points are projected (spatial_order.h), or nullptr to compute a
   // Morton order; callers projecting the same points repeatedly compute it once.
   const IndexList* order = nullptr;
+  // A support point near each point (#X, e.g. its decimation cluster's centroid), with the
+  // points ordered by it: a point's first query is then centred there, asking for more
+  // candidates, so that one query serves all the points around that support point.
+  const IndexList* near_support = nullptr;
 };
 
 struct MlsResult {

@@ -11,4 +11,9 @@ namespace pointscale {
 // points #P by 3; returns #P indices into points.
 IndexList morton_order(const Points& points);
 
+// The indices 0..#P-1 grouped by label, labels ascending, each group in index order: a spatial
+// order when the labels are (decimation clusters are numbered along their split tree).
+// labels #P, each in [0, count).
+IndexList grouped_by_label(const IndexList& labels, Index count);
+
 }  // namespace pointscale
