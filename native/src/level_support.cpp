@@ -273,8 +273,12 @@ Points transported_references(const Points& original, const Points& edited, cons
     }
   }, {}, 1024);
   Points ref(original.rows(), 3);
-  for (Eigen::Index i = 0; i < original.rows(); ++i)
-    ref.row(i) = (rotation[support.labels[i]] * original_normals.row(i).transpose()).transpose();
+  parallel_for(static_cast<std::size_t>(original.rows()), [&](std::size_t b, std::size_t e) {
+    for (std::size_t ii = b; ii < e; ++ii) {
+      const auto i = static_cast<Eigen::Index>(ii);
+      ref.row(i) = (rotation[support.labels[i]] * original_normals.row(i).transpose()).transpose();
+    }
+  }, {}, 4096);
   return ref;
 }
 

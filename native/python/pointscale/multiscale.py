@@ -225,12 +225,13 @@ def _gains_array(dec: Decomposition, gains) -> np.ndarray:
 
 
 def _base_array(dec: Decomposition, base):
+    """The edited base, checked, in world coordinates (the core centres it)."""
     if base is None:
         return None
     b = as_points(base, "base")
     if b.shape[0] != dec.n_points:
         raise ValueError(f"base must have the decomposition's {dec.n_points} points, got {b.shape[0]}")
-    return b - dec.origin
+    return b
 
 
 def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None) -> np.ndarray:
@@ -244,14 +245,14 @@ def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None) -> 
     _check_decomposition(dec)
     g = _gains_array(dec, gains)
     b = _base_array(dec, base)
-    return dec._model.reconstruct(g, b, False, -1, as_callback(progress)) + dec.origin
+    return dec._model.reconstruct(g, b, False, -1, as_callback(progress), dec.origin)
 
 
 def reconstruct_levels(dec: Decomposition, gains=None, base=None) -> np.ndarray:
     """Every level P^0..P^k rebuilt like reconstruct(): (k+1, n, 3)."""
     _check_decomposition(dec)
-    levels, _ = dec._model.reconstruct(_gains_array(dec, gains), _base_array(dec, base), True)
-    return np.stack(levels) + dec.origin
+    levels, _ = dec._model.reconstruct(_gains_array(dec, gains), _base_array(dec, base), True, -1, None, dec.origin)
+    return np.stack(levels)
 
 
 def blend(dec: Decomposition, t: float) -> np.ndarray:
