@@ -48,6 +48,7 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
   std::vector<double> moves(c_count, never), damping(c_count, 1.0), earlier(c_count, never);
   std::vector<unsigned char> pinned(c_count, 0), active(c_count, 1);
   std::vector<Index> todo;
+  Points anchors = support_centroids(level, support);  // kept equal to the anchors' rows of level
   Consistency out;
   for (int round = 0;; ++round) {
     double largest = 0.0;
@@ -61,7 +62,6 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
       for (Index c = 0; c < c_count; ++c) if (active[c] && !pinned[c]) todo.push_back(c);
       const bool sweep = todo.empty();
       if (sweep) for (Index c = 0; c < c_count; ++c) if (!pinned[c]) todo.push_back(c);
-      const Points anchors = support_centroids(level, support);
       Points query(static_cast<Eigen::Index>(todo.size()), 3), query_reference(query.rows(), 3);
       for (std::size_t j = 0; j < todo.size(); ++j) {
         query.row(j) = anchors.row(todo[j]);
@@ -81,6 +81,7 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
           damping[c] = full > moves[c] ? std::max(damping[c] * 0.5, 1.0 / 64.0) : std::min(1.0, damping[c] * 1.5);
           moves[c] = full;
           level.row(i) = (p + damping[c] * (target - p)).transpose();
+          anchors.row(c) = level.row(i);
         }
       });
       largest = 0.0;
@@ -106,6 +107,7 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
         pinned[c] = 1;
         ++out.pinned;
         level.row(support.anchors[c]) = fine.row(support.anchors[c]);
+        anchors.row(c) = level.row(support.anchors[c]);
       }
     std::fill(moves.begin(), moves.end(), never);
     std::fill(active.begin(), active.end(), 1);
