@@ -112,6 +112,8 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
     std::fill(moves.begin(), moves.end(), never);
     std::fill(active.begin(), active.end(), 1);
   }
+  Points().swap(anchors);  // level_normals takes its own copy
+  release_free_memory();  // the iteration's temporaries, before the peak
   // Unoriented: the move below does not depend on the sign, and decompose orients the
   // normals (and flips these details with them) once level 0 is known.
   normals = level_normals(level, support, Points());
@@ -148,7 +150,10 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   Points fine = std::move(points);
   Points anchors0;  // level 0's anchors, which orient it
   model.details.resize(k, n);
-  Points finer_normals;  // unoriented normals of the level built last
+  // The level built last: its unoriented normals in single precision, and its anchors.
+  Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor> finer_normals;
+  Points finer_anchors;
+  Points normals0;  // level 0's unoriented normals
   std::vector<std::vector<signed char>> turns(k);  // turns[l]: sign of n_l . n_{l-1} per point
 
   for (int step = 0; step < k; ++step) {
@@ -184,12 +189,12 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     support.neighbors = std::min<int>(kk, support.clusters);
     support.h = h;
     choose_anchors(fine, projected.positions, support);
+    Points anchor_reference(support.clusters, 3);
+    for (Index c = 0; c < support.clusters; ++c) anchor_reference.row(c) = projected.normals.row(support.anchors[c]);
+    projected.normals = Points();  // before the frames' local coordinates take as much
     const Points centroids = support_centroids(projected.positions, support);
     support.neighborhoods = knn_graph(SpatialIndex(centroids), support.neighbors);
     attach_frames(centroids, projected.positions, support);
-    Points anchor_reference(support.clusters, 3);
-    for (Index c = 0; c < support.clusters; ++c) anchor_reference.row(c) = projected.normals.row(support.anchors[c]);
-    projected.normals = Points();
 
     Points coarse = std::move(projected.positions);
     Points normals;
@@ -198,20 +203,43 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
                                                         model.details.row(l - 1), normals);
     // How this level's normals turn against the finer level's (above it), point by point: all
     // that orienting the finer one needs once this one is oriented, so the normals of a level
-    // are not held, nor computed again, after the next step.
+    // are not held, nor computed again, after the next step. The finer level's are held in
+    // single precision, which tells the sign of the dot product wherever it is not near 0;
+    // there its clusters' normals are computed again, exactly (bitwise as before).
     if (step > 0) {
       std::vector<signed char>& turn = turns[l];
       turn.resize(static_cast<std::size_t>(n));
+      std::vector<unsigned char> unsure(static_cast<std::size_t>(n), 0);
       parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
         for (std::size_t ii = b; ii < e; ++ii) {
           const auto i = static_cast<Eigen::Index>(ii);
-          const double d = finer_normals.row(i).dot(normals.row(i));
+          const double d = finer_normals.row(i).cast<double>().dot(normals.row(i));
           turn[ii] = static_cast<signed char>((d > 0.0) - (d < 0.0));
+          unsure[ii] = std::abs(d) <= 1e-4;  // single precision is good to about 2e-7 here
         }
       }, {}, 4096);
+      const LevelSupport& finer = model.support[l];
+      std::vector<unsigned char> recompute(static_cast<std::size_t>(finer.clusters), 0);
+      bool any = false;
+      for (Eigen::Index i = 0; i < n; ++i) if (unsure[i]) { recompute[finer.labels[i]] = 1; any = true; }
+      if (any) {
+        IndexList which;
+        const Points exact = anchor_normals_of_clusters(finer_anchors, finer, recompute, which);
+        for (std::size_t j = 0; j < which.size(); ++j) {
+          const Index i = which[j];
+          if (!unsure[i]) continue;
+          const double d = exact.row(static_cast<Eigen::Index>(j)).dot(normals.row(i));
+          turn[i] = static_cast<signed char>((d > 0.0) - (d < 0.0));
+        }
+      }
     }
-    finer_normals = std::move(normals);
-    if (l == 1) anchors0 = support_centroids(coarse, support);
+    if (l == 1) {
+      anchors0 = support_centroids(coarse, support);
+      normals0 = std::move(normals);
+    } else {
+      finer_anchors = support_centroids(coarse, support);
+      finer_normals = normals.cast<float>();
+    }
     fine = std::move(coarse);
     LevelReport& report = model.reports[l - 1];
     report.support_points = static_cast<std::size_t>(support.clusters);
@@ -245,7 +273,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   // 0's normals are the ones built last; each finer level flips where its turn against the
   // oriented level below is negative, which is the sign of n_l . n_{l-1} (negating a vector
   // negates a dot product exactly, so this is the very test reconstruction makes).
-  Points& normals0 = finer_normals;
+  finer_normals.resize(0, 3);
   std::vector<unsigned char> flipped(static_cast<std::size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) {
     flipped[i] = normals0.row(i).dot(reference0.row(i)) < 0.0;

@@ -243,6 +243,19 @@ Points anchor_normals(const Points& centroids, const LevelSupport& support, cons
                     support.labels.data(), centroids, support, reference, stage);
 }
 
+Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
+                                  const std::vector<unsigned char>& clusters, IndexList& which) {
+  which.clear();
+  for (std::size_t i = 0; i < support.labels.size(); ++i)
+    if (clusters[support.labels[i]]) which.push_back(static_cast<Index>(i));
+  IndexList labels(which.size());
+  for (std::size_t j = 0; j < which.size(); ++j) labels[j] = support.labels[which[j]];
+  const std::vector<Mat3> frames = cluster_frames(centroids, support);
+  return normals_at(static_cast<Eigen::Index>(which.size()), support.local,
+                    [&](Eigen::Index j, Index c) { return Vec3(frames[c] * support.local.row(which[j]).transpose()); },
+                    labels.data(), centroids, support, Points(), {});
+}
+
 Points transported_references(const Points& original, const Points& edited, const Points& original_normals,
                               const LevelSupport& support) {
   const Points b0 = support_centroids(original, support);

@@ -36,6 +36,13 @@ Points level_normals(const Points& level, const LevelSupport& support, const Poi
 Points anchor_normals(const Points& centroids, const LevelSupport& support, const Points& reference,
                       const ProgressStage& stage = {});
 
+// anchor_normals at the members of some clusters only: #W by 3, the rows of the points of
+// those clusters in ascending order. Each cluster's members are fitted together as in
+// anchor_normals, so the rows are bitwise the same as there.
+// clusters: flags, #C (nonzero: evaluate that cluster's members).
+Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
+                                  const std::vector<unsigned char>& clusters, IndexList& which);
+
 // The anchors' positions in the level. level  #P by 3; returns #C by 3.
 Points support_centroids(const Points& level, const LevelSupport& support);
 
