@@ -245,7 +245,7 @@ PYBIND11_MODULE(_core, m) {
     if (!near.is_none()) {  // checked by the Python layer: (n,) in [0, #onto)
       const auto a = near.cast<IndexArray>();
       near_support.assign(a.data(), a.data() + a.size());
-      order = grouped_by_label(near_support, static_cast<Index>(s.rows()));
+      order = group_by_label(near_support.data(), near_support.size(), static_cast<Index>(s.rows())).members;
       o.near_support = &near_support;
       o.order = &order;
     }

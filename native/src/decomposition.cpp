@@ -23,6 +23,38 @@ double median(Eigen::VectorXd v) {
   return v(v.size() / 2);
 }
 
+using FloatNormals = Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+// Per point, the sign of n_finer . n (-1, 0 or 1): the finer level's normals, held in single
+// precision, against the unoriented normals of the level below it. Single precision tells the
+// sign wherever the dot product is not near 0; there the finer level's normals are evaluated
+// again, exactly, for the clusters concerned (anchor_normals_of_clusters: bitwise as before).
+// finer_anchors #C by 3 and finer: the finer level's anchors and support.
+std::vector<signed char> turn_signs(const FloatNormals& finer_normals, const Points& finer_anchors,
+                                    const LevelSupport& finer, const Points& normals) {
+  const Eigen::Index n = normals.rows();
+  std::vector<signed char> turn(static_cast<std::size_t>(n));
+  std::vector<unsigned char> unsure(static_cast<std::size_t>(n), 0);
+  auto sign = [](double d) { return static_cast<signed char>((d > 0.0) - (d < 0.0)); };
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+    for (std::size_t ii = b; ii < e; ++ii) {
+      const auto i = static_cast<Eigen::Index>(ii);
+      const double d = finer_normals.row(i).cast<double>().dot(normals.row(i));
+      turn[ii] = sign(d);
+      unsure[ii] = std::abs(d) <= 1e-4;  // single precision is good to about 2e-7 here
+    }
+  }, {}, 4096);
+  std::vector<unsigned char> recompute(static_cast<std::size_t>(finer.clusters), 0);
+  bool any = false;
+  for (Eigen::Index i = 0; i < n; ++i) if (unsure[i]) { recompute[finer.labels[i]] = 1; any = true; }
+  if (!any) return turn;
+  IndexList which;
+  const Points exact = anchor_normals_of_clusters(finer_anchors, finer, recompute, which);
+  for (std::size_t j = 0; j < which.size(); ++j)
+    if (unsure[which[j]]) turn[which[j]] = sign(exact.row(static_cast<Eigen::Index>(j)).dot(normals.row(which[j])));
+  return turn;
+}
+
 struct Consistency {
   int iterations = 0;
   double residual = 0.0;
@@ -148,10 +180,10 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   // Only the level being built and the one it comes from are held; a finished level keeps its
   // detail along its unoriented normals, and how those turn against the next level's.
   Points fine = std::move(points);
-  Points anchors0;  // level 0's anchors, which orient it
   model.details.resize(k, n);
-  // The level built last: its unoriented normals in single precision, and its anchors.
-  Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor> finer_normals;
+  // The level built last: its unoriented normals in single precision, and its anchors
+  // (after the last step, level 0's, which orient it).
+  FloatNormals finer_normals;
   Points finer_anchors;
   Points normals0;  // level 0's unoriented normals
   std::vector<std::vector<signed char>> turns(k);  // turns[l]: sign of n_l . n_{l-1} per point
@@ -175,7 +207,8 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     // around one query at its centroid (clusters come in a spatial order).
     MlsResult projected;
     {
-      const IndexList order = grouped_by_label(clusters.labels, static_cast<Index>(clusters.centroids.rows()));
+      const IndexList order = group_by_label(clusters.labels.data(), clusters.labels.size(),
+                                             static_cast<Index>(clusters.centroids.rows())).members;
       MlsOptions mls = options.mls;
       mls.order = &order;
       mls.near_support = &clusters.labels;
@@ -201,45 +234,13 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     const Consistency consistency = make_offsets_normal(fine, coarse, support, anchor_reference, scale,
                                                         options.consistency_iterations, stage.sub(0.8, 1.0),
                                                         model.details.row(l - 1), normals);
-    // How this level's normals turn against the finer level's (above it), point by point: all
-    // that orienting the finer one needs once this one is oriented, so the normals of a level
-    // are not held, nor computed again, after the next step. The finer level's are held in
-    // single precision, which tells the sign of the dot product wherever it is not near 0;
-    // there its clusters' normals are computed again, exactly (bitwise as before).
-    if (step > 0) {
-      std::vector<signed char>& turn = turns[l];
-      turn.resize(static_cast<std::size_t>(n));
-      std::vector<unsigned char> unsure(static_cast<std::size_t>(n), 0);
-      parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-        for (std::size_t ii = b; ii < e; ++ii) {
-          const auto i = static_cast<Eigen::Index>(ii);
-          const double d = finer_normals.row(i).cast<double>().dot(normals.row(i));
-          turn[ii] = static_cast<signed char>((d > 0.0) - (d < 0.0));
-          unsure[ii] = std::abs(d) <= 1e-4;  // single precision is good to about 2e-7 here
-        }
-      }, {}, 4096);
-      const LevelSupport& finer = model.support[l];
-      std::vector<unsigned char> recompute(static_cast<std::size_t>(finer.clusters), 0);
-      bool any = false;
-      for (Eigen::Index i = 0; i < n; ++i) if (unsure[i]) { recompute[finer.labels[i]] = 1; any = true; }
-      if (any) {
-        IndexList which;
-        const Points exact = anchor_normals_of_clusters(finer_anchors, finer, recompute, which);
-        for (std::size_t j = 0; j < which.size(); ++j) {
-          const Index i = which[j];
-          if (!unsure[i]) continue;
-          const double d = exact.row(static_cast<Eigen::Index>(j)).dot(normals.row(i));
-          turn[i] = static_cast<signed char>((d > 0.0) - (d < 0.0));
-        }
-      }
-    }
-    if (l == 1) {
-      anchors0 = support_centroids(coarse, support);
-      normals0 = std::move(normals);
-    } else {
-      finer_anchors = support_centroids(coarse, support);
-      finer_normals = normals.cast<float>();
-    }
+    // How this level's normals turn against the finer level's: all that orienting the finer
+    // one needs once this one is oriented, so a level's normals are not held, nor computed
+    // again, after the next step.
+    if (step > 0) turns[l] = turn_signs(finer_normals, finer_anchors, model.support[l], normals);
+    finer_anchors = support_centroids(coarse, support);
+    if (l == 1) normals0 = std::move(normals);
+    else finer_normals = normals.cast<float>();
     fine = std::move(coarse);
     LevelReport& report = model.reports[l - 1];
     report.support_points = static_cast<std::size_t>(support.clusters);
@@ -260,7 +261,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   if (input_normals) {
     reference0 = *input_normals;
   } else {
-    const Points& c0 = anchors0;
+    const Points& c0 = finer_anchors;
     std::vector<Index> own(static_cast<std::size_t>(s0.clusters));
     for (Index c = 0; c < s0.clusters; ++c) own[c] = c;
     Points cn = support_normals(c0, own.data(), c0, s0, Points::Zero(s0.clusters, 3));

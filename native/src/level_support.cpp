@@ -9,6 +9,7 @@
 #include "pointscale/batched_eigen.h"
 #include "pointscale/parallel.h"
 #include "pointscale/plane_fit.h"
+#include "pointscale/spatial_order.h"
 #include "pointscale/stencil_plane.h"
 
 namespace pointscale {
@@ -41,22 +42,6 @@ inline void prefetch_line(const void* p) {
 #endif
 }
 
-// Each cluster's members, contiguous: members[offsets[c] .. offsets[c + 1]) (a counting sort).
-struct ClusterMembers {
-  std::vector<Index> offsets, members;
-};
-
-ClusterMembers group_by_cluster(const Index* labels, Eigen::Index n, Index clusters) {
-  ClusterMembers g;
-  g.offsets.assign(static_cast<std::size_t>(clusters) + 1, 0);
-  for (Eigen::Index i = 0; i < n; ++i) ++g.offsets[static_cast<std::size_t>(labels[i]) + 1];
-  for (std::size_t c = 0; c < static_cast<std::size_t>(clusters); ++c) g.offsets[c + 1] += g.offsets[c];
-  g.members.resize(static_cast<std::size_t>(n));
-  std::vector<Index> next(g.offsets.begin(), g.offsets.end() - 1);
-  for (Eigen::Index i = 0; i < n; ++i) g.members[static_cast<std::size_t>(next[labels[i]]++)] = static_cast<Index>(i);
-  return g;
-}
-
 // support_normals with each query given by offset_at(i, c), its position relative to the
 // centroid of its cluster c, so callers that can compute it on the fly need not hold all of
 // them (#Q by 3 doubles) at once. Works cluster by cluster: all members of a cluster are fitted
@@ -69,7 +54,7 @@ Points normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offs
   const bool has_reference = reference.rows() > 0;
   // Weights floored (plane_fit.h): the normal must be a smooth function of the anchors, since
   // reconstruction re-evaluates it, also at outliers far from them.
-  const ClusterMembers groups = group_by_cluster(query_labels, n, support.clusters);
+  const LabelGroups groups = group_by_label(query_labels, static_cast<std::size_t>(n), support.clusters);
   Points normals(n, 3);
   const std::size_t clusters = static_cast<std::size_t>(support.clusters);
   const std::size_t chunk = std::max<std::size_t>(1, 512 * clusters / std::max<std::size_t>(1, n));

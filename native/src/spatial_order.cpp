@@ -43,13 +43,15 @@ IndexList morton_order(const Points& points) {
   return order;
 }
 
-IndexList grouped_by_label(const IndexList& labels, Index count) {
-  std::vector<std::size_t> start(static_cast<std::size_t>(count) + 1, 0);
-  for (const Index l : labels) ++start[static_cast<std::size_t>(l) + 1];
-  for (std::size_t c = 0; c < static_cast<std::size_t>(count); ++c) start[c + 1] += start[c];
-  IndexList out(labels.size());
-  for (std::size_t i = 0; i < labels.size(); ++i) out[start[labels[i]]++] = static_cast<Index>(i);
-  return out;
+LabelGroups group_by_label(const Index* labels, std::size_t n, Index count) {
+  LabelGroups g;
+  g.offsets.assign(static_cast<std::size_t>(count) + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) ++g.offsets[static_cast<std::size_t>(labels[i]) + 1];
+  for (std::size_t c = 0; c < static_cast<std::size_t>(count); ++c) g.offsets[c + 1] += g.offsets[c];
+  g.members.resize(n);
+  std::vector<Index> next(g.offsets.begin(), g.offsets.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) g.members[static_cast<std::size_t>(next[labels[i]]++)] = static_cast<Index>(i);
+  return g;
 }
 
 }  // namespace pointscale

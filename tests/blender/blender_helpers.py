@@ -1,9 +1,11 @@
 """Small bpy helpers for the Blender tests (bulk reads only), and the add-on loader."""
 
+import contextlib
 import importlib.util
 import sys
 from pathlib import Path
 
+import bmesh
 import bpy
 import numpy as np
 
@@ -136,3 +138,18 @@ def decompose(obj, **settings):
     for name, value in settings.items():
         setattr(s, name, value)
     assert bpy.ops.pointscale.decompose() == {"FINISHED"}
+
+
+@contextlib.contextmanager
+def edited_bmesh(obj):
+    """obj's mesh as a BMesh with the vertex lookup table ready; written back on leaving."""
+    me = obj.data
+    bm = bmesh.new()
+    try:
+        bm.from_mesh(me)
+        bm.verts.ensure_lookup_table()
+        yield bm
+        bm.to_mesh(me)
+    finally:
+        bm.free()
+    me.update()

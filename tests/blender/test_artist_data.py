@@ -1,7 +1,6 @@
 """The artist's own data survives: their shape keys, earlier results, the active key and the
 vertex order are respected, and a damaged layout is refused with a message, not a traceback."""
 
-import bmesh
 import bpy
 import numpy as np
 import pytest
@@ -84,18 +83,12 @@ def test_a_removed_layout_key_is_refused_with_a_message():
 def test_reordered_vertices_are_refused():
     obj = h.mesh_object(h.noisy_sphere(4000), name="Sorted")
     h.decompose(obj)
-    me = obj.data
-    bm = bmesh.new()
-    bm.from_mesh(me)
-    bm.verts.ensure_lookup_table()
-    order = np.random.default_rng(0).permutation(len(bm.verts))
-    for v, i in zip(bm.verts, order):
-        v.index = int(i)
-    bm.verts.sort()
-    bm.to_mesh(me)
-    bm.free()
-    me.update()
-    assert len(me.vertices) == 4000
+    with h.edited_bmesh(obj) as bm:
+        order = np.random.default_rng(0).permutation(len(bm.verts))
+        for v, i in zip(bm.verts, order):
+            v.index = int(i)
+        bm.verts.sort()
+    assert len(obj.data.vertices) == 4000
     h.assert_refused(obj, "rebuild_detail", "reordered")
 
 

@@ -56,13 +56,8 @@ def test_topology_change_after_decompose_is_refused():
     obj = h.mesh_object(h.noisy_sphere(4000), name="Topo")
     h.decompose(obj)
     me = obj.data
-    bm = bmesh.new()
-    bm.from_mesh(me)
-    bm.verts.ensure_lookup_table()
-    bmesh.ops.delete(bm, geom=[bm.verts[i] for i in range(10)], context="VERTS")
-    bm.to_mesh(me)
-    bm.free()
-    me.update()
+    with h.edited_bmesh(obj) as bm:
+        bmesh.ops.delete(bm, geom=[bm.verts[i] for i in range(10)], context="VERTS")
     assert len(me.vertices) == 3990
     before = h.snapshot(obj)
     for name, kw in DATA_OPERATORS:

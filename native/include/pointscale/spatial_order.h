@@ -4,6 +4,8 @@
 // (a 200k decompose of random-order points: 1.61 s -> 1.33 s with its projections in this
 // order). The points themselves are not moved; only the loop visits them in this order.
 #pragma once
+#include <vector>
+
 #include "pointscale/types.h"
 
 namespace pointscale {
@@ -11,9 +13,14 @@ namespace pointscale {
 // points #P by 3; returns #P indices into points.
 IndexList morton_order(const Points& points);
 
-// The indices 0..#P-1 grouped by label, labels ascending, each group in index order: a spatial
+// The indices 0..#P-1 grouped by label (a counting sort): group c is
+// members[offsets[c] .. offsets[c + 1]), in index order. Taken in full, members is a spatial
 // order when the labels are (decimation clusters are numbered along their split tree).
 // labels #P, each in [0, count).
-IndexList grouped_by_label(const IndexList& labels, Index count);
+struct LabelGroups {
+  std::vector<Index> offsets;  // #count + 1
+  IndexList members;           // #P
+};
+LabelGroups group_by_label(const Index* labels, std::size_t n, Index count);
 
 }  // namespace pointscale
