@@ -193,7 +193,8 @@ PYBIND11_MODULE(_core, m) {
         if (has_base) edited = to_points_centred(base.cast<DoubleArray>(), o);
         PythonProgress p(progress);
         Reconstruction r = without_gil([&] {
-          Reconstruction out = reconstruct(s, g, has_base ? &edited : nullptr, keep_levels, upto, p.get());
+          Reconstruction out = has_base ? reconstruct_from_base(s, g, std::move(edited), keep_levels, upto, p.get())
+                                        : reconstruct(s, g, nullptr, keep_levels, upto, p.get());
           if (has_origin) {
             const Eigen::RowVector3d shift(o.data()[0], o.data()[1], o.data()[2]);
             out.positions.rowwise() += shift;

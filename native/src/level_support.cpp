@@ -46,23 +46,25 @@ inline void prefetch_line(const void* p) {
 // centroid of its cluster c, so callers that can compute it on the fly need not hold all of
 // them (#Q by 3 doubles) at once. Works cluster by cluster: all members of a cluster are fitted
 // to the same neighbour clusters, gathered once.
+// Writes into `normals`, whose storage is reused when it has n rows already (reconstruction
+// alternates two buffers: fresh pages cost it more than the copies it saves).
 template <class OffsetAt>
-Points normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offset_at, const Index* query_labels,
-                  const Points& centroids,
-                  const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
+void normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offset_at, const Index* query_labels,
+                const Points& centroids, const LevelSupport& support, const Points& reference,
+                const ProgressStage& stage, Points& normals) {
   const int k = support.neighbors;
   const bool has_reference = reference.rows() > 0;
   // Weights floored (plane_fit.h): the normal must be a smooth function of the anchors, since
   // reconstruction re-evaluates it, also at outliers far from them.
   const LabelGroups groups = group_by_label(query_labels, static_cast<std::size_t>(n), support.clusters);
-  Points normals(n, 3);
+  normals.resize(n, 3);
   const std::size_t clusters = static_cast<std::size_t>(support.clusters);
   const std::size_t chunk = std::max<std::size_t>(1, 512 * clusters / std::max<std::size_t>(1, n));
   parallel_for(clusters, [&](std::size_t b, std::size_t e) {
     PlaneStencil stencil;
     std::vector<double> queries, cov, trace, valid;
     std::vector<double> w(k, 1.0);
-    // Covariances wait here, from any cluster, until eight fill one batched eigen solve.
+    // Covariances wait here, from any cluster, until sixteen fill one batched eigen solve.
     struct Pending {
       alignas(64) double cov[6][eigen_lanes], trace[eigen_lanes], used[eigen_lanes];
       Eigen::Index row[eigen_lanes];
@@ -94,7 +96,7 @@ Points normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offs
       pending.count = 0;
     };
     // A cluster's members lie anywhere in the point order, and waiting for their rows from
-    // memory took most of this loop's time: fetch the next cluster's rows while this one works.
+    // memory took most of this loop's time: fetch the rows of the cluster three ahead while this one works.
     auto prefetch = [&](std::size_t cc) {
       if (cc >= clusters) return;
       for (Index t = groups.offsets[cc]; t < groups.offsets[cc + 1]; ++t) {
@@ -104,9 +106,9 @@ Points normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offs
         if (has_reference) prefetch_line(reference.data() + 3 * i);
       }
     };
-    prefetch(b);
+    for (std::size_t a = b; a < b + 3; ++a) prefetch(a);
     for (std::size_t cc = b; cc < e; ++cc) {
-      prefetch(cc + 1);
+      prefetch(cc + 3);
       const Index c = static_cast<Index>(cc);
       const Index* members = groups.members.data() + groups.offsets[cc];
       const int m = groups.offsets[cc + 1] - groups.offsets[cc];
@@ -135,16 +137,17 @@ Points normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offs
     }
     if (pending.count > 0) flush();
   }, stage, chunk);
-  return normals;
 }
 
 }  // namespace
 
 Points support_normals(const Points& query, const Index* query_labels, const Points& centroids,
                        const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
-  return normals_at(query.rows(), query,
-                    [&](Eigen::Index i, Index c) { return Vec3((query.row(i) - centroids.row(c)).transpose()); },
-                    query_labels, centroids, support, reference, stage);
+  Points normals;
+  normals_at(query.rows(), query,
+             [&](Eigen::Index i, Index c) { return Vec3((query.row(i) - centroids.row(c)).transpose()); },
+             query_labels, centroids, support, reference, stage, normals);
+  return normals;
 }
 
 namespace {
@@ -215,17 +218,35 @@ std::vector<Mat3> cluster_frames(const Points& centroids, const LevelSupport& su
 
 }  // namespace
 
+namespace {
+
+void anchor_normals_into(const Points& centroids, const LevelSupport& support, const Points& reference,
+                         const ProgressStage& stage, Points& normals) {
+  const std::vector<Mat3> frames = cluster_frames(centroids, support);
+  normals_at(support.local.rows(), support.local,
+             [&](Eigen::Index i, Index c) { return Vec3(frames[c] * support.local.row(i).transpose()); },
+             support.labels.data(), centroids, support, reference, stage, normals);
+}
+
+}  // namespace
+
 Points level_normals(const Points& level, const LevelSupport& support, const Points& reference,
                      const ProgressStage& stage) {
-  return anchor_normals(support_centroids(level, support), support, reference, stage);
+  Points normals;
+  anchor_normals_into(support_centroids(level, support), support, reference, stage, normals);
+  return normals;
+}
+
+void level_normals(const Points& level, const LevelSupport& support, const Points& reference,
+                   const ProgressStage& stage, Points& normals) {
+  anchor_normals_into(support_centroids(level, support), support, reference, stage, normals);
 }
 
 Points anchor_normals(const Points& centroids, const LevelSupport& support, const Points& reference,
                       const ProgressStage& stage) {
-  const std::vector<Mat3> frames = cluster_frames(centroids, support);
-  return normals_at(support.local.rows(), support.local,
-                    [&](Eigen::Index i, Index c) { return Vec3(frames[c] * support.local.row(i).transpose()); },
-                    support.labels.data(), centroids, support, reference, stage);
+  Points normals;
+  anchor_normals_into(centroids, support, reference, stage, normals);
+  return normals;
 }
 
 Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
@@ -236,9 +257,11 @@ Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& s
   IndexList labels(which.size());
   for (std::size_t j = 0; j < which.size(); ++j) labels[j] = support.labels[which[j]];
   const std::vector<Mat3> frames = cluster_frames(centroids, support);
-  return normals_at(static_cast<Eigen::Index>(which.size()), support.local,
-                    [&](Eigen::Index j, Index c) { return Vec3(frames[c] * support.local.row(which[j]).transpose()); },
-                    labels.data(), centroids, support, Points(), {});
+  Points normals;
+  normals_at(static_cast<Eigen::Index>(which.size()), support.local,
+             [&](Eigen::Index j, Index c) { return Vec3(frames[c] * support.local.row(which[j]).transpose()); },
+             labels.data(), centroids, support, Points(), {}, normals);
+  return normals;
 }
 
 Points transported_references(const Points& original, const Points& edited, const Points& original_normals,

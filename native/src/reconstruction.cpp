@@ -1,23 +1,26 @@
 #include "pointscale/reconstruction.h"
 
+#include <utility>
+
 #include "pointscale/parallel.h"
 
 namespace pointscale {
 
-Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
-                           bool keep_levels, int upto, const ProgressCallback* progress) {
+namespace {
+
+// p: P^0 to start from, edited or not; reference: its normals' orientation.
+Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points p,
+                                  Points reference, bool keep_levels, int upto, const ProgressCallback* progress) {
   const int k = model.bands();
   if (upto < 0 || upto > k) upto = k;
   const bool per_point = gains.cols() > 1;
   const ProgressStage all{progress, 0.0, 1.0};
   Reconstruction out;
-  Points p = base ? *base : model.base;
-  Points reference = base ? transported_references(model.base, *base, model.base_normals, model.support[0])
-                          : model.base_normals;
   if (keep_levels) out.levels.push_back(p);
+  Points normals;  // alternates with reference, so that each level reuses the storage of the one before
   for (int l = 0; l < upto; ++l) {
     const LevelSupport& s = model.support[l];
-    Points normals = level_normals(p, s, reference, all.sub(double(l) / upto, double(l + 1) / upto));
+    level_normals(p, s, reference, all.sub(double(l) / upto, double(l + 1) / upto), normals);
     parallel_for(static_cast<std::size_t>(p.rows()), [&](std::size_t b, std::size_t e) {
       for (std::size_t ii = b; ii < e; ++ii) {
         const Eigen::Index i = static_cast<Eigen::Index>(ii);
@@ -26,10 +29,24 @@ Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& 
       }
     }, {}, 4096);
     if (keep_levels) { out.levels.push_back(p); out.normals.push_back(normals); }
-    reference = std::move(normals);
+    std::swap(reference, normals);
   }
   out.positions = std::move(p);
   return out;
+}
+
+}  // namespace
+
+Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
+                           bool keep_levels, int upto, const ProgressCallback* progress) {
+  if (base) return reconstruct_from_base(model, gains, *base, keep_levels, upto, progress);
+  return reconstruct_levels(model, gains, model.base, model.base_normals, keep_levels, upto, progress);
+}
+
+Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points base,
+                                     bool keep_levels, int upto, const ProgressCallback* progress) {
+  Points reference = transported_references(model.base, base, model.base_normals, model.support[0]);
+  return reconstruct_levels(model, gains, std::move(base), std::move(reference), keep_levels, upto, progress);
 }
 
 }  // namespace pointscale

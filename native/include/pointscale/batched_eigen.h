@@ -1,7 +1,7 @@
-// smallest_eigenvector (plane_fit.h) for eight matrices at once, one per SIMD lane: the same
+// smallest_eigenvector (plane_fit.h) for sixteen matrices at once, one per SIMD lane: the same
 // operations in the same order for each lane, each lane frozen once it has converged, so every
 // result equals what that lane would give alone, whatever the other lanes hold. The squaring
-// loop is latency-bound scalar code; eight lanes share its latency.
+// loop is latency-bound scalar code; sixteen lanes (two AVX-512 registers per value) share its latency.
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -10,7 +10,7 @@
 
 namespace pointscale {
 
-constexpr int eigen_lanes = 8;
+constexpr int eigen_lanes = 16;
 
 // cov[0..5][lane]: the entries xx, yy, zz, xy, xz, yz of a symmetric positive semi-definite
 // matrix; trace[lane] > 0. used[lane] = 0 marks an unused lane (its cov must still be finite).

@@ -31,6 +31,10 @@ void attach_frames(const Points& centroids, const Points& positions, LevelSuppor
 Points level_normals(const Points& level, const LevelSupport& support, const Points& reference,
                      const ProgressStage& stage = {});
 
+// The same into `normals` (#P by 3), reusing its storage when it has the size already.
+void level_normals(const Points& level, const LevelSupport& support, const Points& reference,
+                   const ProgressStage& stage, Points& normals);
+
 // The same from the anchors' positions alone (#C by 3, support_centroids of the level): the
 // normals need nothing else, so a finished level can be dropped and its anchors kept.
 Points anchor_normals(const Points& centroids, const LevelSupport& support, const Points& reference,

@@ -19,4 +19,8 @@ struct Reconstruction {
 Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
                            bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr);
 
+// The same from an edited base that the caller hands over (no copy of it is made).
+Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points base,
+                                     bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr);
+
 }  // namespace pointscale
