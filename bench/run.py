@@ -551,7 +551,7 @@ def main(argv: list[str] | None = None) -> int:
     print("(b) pcl::MovingLeastSquares<PointXYZ, PointNormal>, order 1, radius calibrated to a mean of "
           "K neighbours, %d threads, process() only, median of %d;" % (args.threads, args.reps))
     print("CPU-time ratio: user+system CPU seconds of (a) over (b), all threads; less sensitive to other load than wall time.\n"
-          "reconstruct = pointscale.reconstruct(dec, base=dec.base); peak mem = VmHWM (peak RSS) "
+          "reconstruct = pointscale.reconstruct(dec, base=base), base = dec.base taken once before the runs; peak mem = VmHWM (peak RSS) "
           "minus RSS after loading, fresh subprocess per cloud.")
     if not have_ps:
         print("pointscale:", ps_why)
