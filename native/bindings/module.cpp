@@ -106,7 +106,7 @@ py::dict model_arrays(const MultiscaleModel& m) {
     d[("kernel_" + s).c_str()] = Eigen::VectorXd(m.support[l].h);
     d[("anchors_" + s).c_str()] = to_array(m.support[l].anchors, {m.support[l].clusters});
     d[("frames_" + s).c_str()] = to_array(m.support[l].frames, {m.support[l].clusters, 2});
-    d[("local_" + s).c_str()] = m.support[l].local;
+    d[("local_" + s).c_str()] = local_by_point(m.support[l]);  // saved in point order
   }
   d["labels"] = labels;
   return d;
@@ -145,11 +145,13 @@ MultiscaleModel model_from_arrays(const py::dict& d) {
     auto fr = d[("frames_" + s).c_str()].cast<IndexArray>();
     if (fr.ndim() != 2 || fr.shape(0) != sup.clusters || fr.shape(1) != 2) throw std::invalid_argument("frames must be (clusters, 2) at level " + s);
     sup.frames.assign(fr.data(), fr.data() + fr.size());
-    sup.local = to_points(d[("local_" + s).c_str()].cast<DoubleArray>());
-    if (sup.local.rows() != n) throw std::invalid_argument("local coordinates must be (n, 3) at level " + s);
     for (Index v : sup.frames) if (v < 0 || v >= sup.clusters) throw std::invalid_argument("frame out of range at level " + s);
     for (Index v : sup.labels) if (v < 0 || v >= sup.clusters) throw std::invalid_argument("label out of range at level " + s);
     for (Index v : sup.neighborhoods) if (v < 0 || v >= sup.clusters) throw std::invalid_argument("neighbourhood out of range at level " + s);
+    // Saved in point order; the core keeps them in cluster order (level_support.h).
+    const Points local = to_points(d[("local_" + s).c_str()].cast<DoubleArray>());
+    if (local.rows() != n) throw std::invalid_argument("local coordinates must be (n, 3) at level " + s);
+    local_from_points(local, sup);
   }
   return m;
 }

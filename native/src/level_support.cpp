@@ -42,14 +42,15 @@ inline void prefetch_line(const void* p) {
 #endif
 }
 
-// support_normals with each query given by offset_at(i, c), its position relative to the
-// centroid of its cluster c, so callers that can compute it on the fly need not hold all of
-// them (#Q by 3 doubles) at once. Works cluster by cluster: all members of a cluster are fitted
+// support_normals with each query given by offset_at(i, c, t), its position relative to the
+// centroid of its cluster c (i: the query, t: its place in the grouping by cluster), so callers
+// that can compute it on the fly need not hold all of them (#Q by 3 doubles) at once.
+// point_rows: rows that offset_at reads by query index, to prefetch; null if it reads none. Works cluster by cluster: all members of a cluster are fitted
 // to the same neighbour clusters, gathered once.
 // Writes into `normals`, whose storage is reused when it has n rows already (reconstruction
 // alternates two buffers: fresh pages cost it more than the copies it saves).
 template <class OffsetAt>
-void normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offset_at, const Index* query_labels,
+void normals_at(Eigen::Index n, const Points* point_rows, const OffsetAt& offset_at, const Index* query_labels,
                 const Points& centroids, const LevelSupport& support, const Points& reference,
                 const ProgressStage& stage, Points& normals) {
   const int k = support.neighbors;
@@ -101,7 +102,7 @@ void normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offset
       if (cc >= clusters) return;
       for (Index t = groups.offsets[cc]; t < groups.offsets[cc + 1]; ++t) {
         const Eigen::Index i = groups.members[static_cast<std::size_t>(t)];
-        prefetch_line(query_rows.data() + 3 * i);
+        if (point_rows) prefetch_line(point_rows->data() + 3 * i);
         prefetch_line(normals.data() + 3 * i);
         if (has_reference) prefetch_line(reference.data() + 3 * i);
       }
@@ -118,7 +119,7 @@ void normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offset
       const auto mm = static_cast<std::size_t>(m);
       queries.resize(3 * mm); cov.resize(6 * mm); trace.resize(mm); valid.resize(mm);
       for (int t = 0; t < m; ++t) {
-        const Vec3 q = offset_at(members[t], c);
+        const Vec3 q = offset_at(members[t], c, groups.offsets[cc] + t);
         queries[3 * t] = q.x(); queries[3 * t + 1] = q.y(); queries[3 * t + 2] = q.z();
       }
       stencil_covariances(stencil, queries.data(), m, weight_floor, cov.data(), trace.data(), valid.data());
@@ -144,8 +145,8 @@ void normals_at(Eigen::Index n, const Points& query_rows, const OffsetAt& offset
 Points support_normals(const Points& query, const Index* query_labels, const Points& centroids,
                        const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
   Points normals;
-  normals_at(query.rows(), query,
-             [&](Eigen::Index i, Index c) { return Vec3((query.row(i) - centroids.row(c)).transpose()); },
+  normals_at(query.rows(), &query,
+             [&](Eigen::Index i, Index c, Index) { return Vec3((query.row(i) - centroids.row(c)).transpose()); },
              query_labels, centroids, support, reference, stage, normals);
   return normals;
 }
@@ -195,15 +196,34 @@ void attach_frames(const Points& centroids, const Points& positions, LevelSuppor
     support.frames[2 * static_cast<std::size_t>(c)] = a;
     support.frames[2 * static_cast<std::size_t>(c) + 1] = b;
   }
+  // In cluster order (level_support.h): row t for point members[t].
+  const LabelGroups groups = group_by_label(support.labels.data(), support.labels.size(), support.clusters);
   support.local.resize(positions.rows(), 3);
-  parallel_for(static_cast<std::size_t>(positions.rows()), [&](std::size_t b, std::size_t e) {
-    for (std::size_t ii = b; ii < e; ++ii) {
-      const Eigen::Index i = static_cast<Eigen::Index>(ii);
-      const Index c = support.labels[i];
+  parallel_for(static_cast<std::size_t>(support.clusters), [&](std::size_t b, std::size_t e) {
+    for (std::size_t cc = b; cc < e; ++cc) {
+      const Index c = static_cast<Index>(cc);
       const Mat3 f = cluster_frame(centroids, support, c);
-      support.local.row(i) = (f.transpose() * (positions.row(i) - centroids.row(c)).transpose()).transpose();
+      for (Index t = groups.offsets[cc]; t < groups.offsets[cc + 1]; ++t) {
+        const Eigen::Index i = groups.members[static_cast<std::size_t>(t)];
+        support.local.row(t) = (f.transpose() * (positions.row(i) - centroids.row(c)).transpose()).transpose();
+      }
     }
-  }, {}, 4096);
+  }, {}, 256);
+}
+
+Points local_by_point(const LevelSupport& support) {
+  const LabelGroups groups = group_by_label(support.labels.data(), support.labels.size(), support.clusters);
+  Points out(support.local.rows(), 3);
+  for (std::size_t t = 0; t < groups.members.size(); ++t)
+    out.row(groups.members[t]) = support.local.row(static_cast<Eigen::Index>(t));
+  return out;
+}
+
+void local_from_points(const Points& by_point, LevelSupport& support) {
+  const LabelGroups groups = group_by_label(support.labels.data(), support.labels.size(), support.clusters);
+  support.local.resize(by_point.rows(), 3);
+  for (std::size_t t = 0; t < groups.members.size(); ++t)
+    support.local.row(static_cast<Eigen::Index>(t)) = by_point.row(groups.members[t]);
 }
 
 namespace {
@@ -223,8 +243,9 @@ namespace {
 void anchor_normals_into(const Points& centroids, const LevelSupport& support, const Points& reference,
                          const ProgressStage& stage, Points& normals) {
   const std::vector<Mat3> frames = cluster_frames(centroids, support);
-  normals_at(support.local.rows(), support.local,
-             [&](Eigen::Index i, Index c) { return Vec3(frames[c] * support.local.row(i).transpose()); },
+  // The grouping is the one support.local is stored in, so row t is the query's own.
+  normals_at(support.local.rows(), nullptr,
+             [&](Eigen::Index, Index c, Index t) { return Vec3(frames[c] * support.local.row(t).transpose()); },
              support.labels.data(), centroids, support, reference, stage, normals);
 }
 
@@ -251,15 +272,22 @@ Points anchor_normals(const Points& centroids, const LevelSupport& support, cons
 
 Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
                                   const std::vector<unsigned char>& clusters, IndexList& which) {
+  // Taken cluster by cluster in the order support.local is stored in: rows[j] is which[j]'s row.
+  const LabelGroups groups = group_by_label(support.labels.data(), support.labels.size(), support.clusters);
   which.clear();
-  for (std::size_t i = 0; i < support.labels.size(); ++i)
-    if (clusters[support.labels[i]]) which.push_back(static_cast<Index>(i));
-  IndexList labels(which.size());
-  for (std::size_t j = 0; j < which.size(); ++j) labels[j] = support.labels[which[j]];
+  IndexList rows, labels;
+  for (Index c = 0; c < support.clusters; ++c) {
+    if (!clusters[c]) continue;
+    for (Index t = groups.offsets[c]; t < groups.offsets[c + 1]; ++t) {
+      which.push_back(groups.members[static_cast<std::size_t>(t)]);
+      rows.push_back(t);
+      labels.push_back(c);
+    }
+  }
   const std::vector<Mat3> frames = cluster_frames(centroids, support);
   Points normals;
-  normals_at(static_cast<Eigen::Index>(which.size()), support.local,
-             [&](Eigen::Index j, Index c) { return Vec3(frames[c] * support.local.row(which[j]).transpose()); },
+  normals_at(static_cast<Eigen::Index>(which.size()), nullptr,
+             [&](Eigen::Index j, Index c, Index) { return Vec3(frames[c] * support.local.row(rows[j]).transpose()); },
              labels.data(), centroids, support, Points(), {}, normals);
   return normals;
 }

@@ -17,8 +17,15 @@ struct LevelSupport {
   IndexList neighborhoods;   // #C by K nearest clusters of each cluster, itself first
   Eigen::VectorXd h;         // #C kernel width of each cluster
   IndexList frames;          // #C by 2: the neighbour clusters that span each cluster's frame
-  Points local;              // #P by 3: each point's query position in its cluster's frame
+  // #P by 3: each point's query position in its cluster's frame, in cluster order: row t
+  // belongs to point group_by_label(labels).members[t] (spatial_order.h), so that the normals
+  // of a cluster's members read consecutive rows. local_by_point / local_from_points convert.
+  Points local;
 };
+
+// support.local in point order (row i for point i), and back: for saving and loading.
+Points local_by_point(const LevelSupport& support);
+void local_from_points(const Points& by_point, LevelSupport& support);
 
 // Chooses each cluster's frame and stores every point's coordinates in it. The normal of a
 // point is evaluated at that query position, which moves with the centroids only, so a point's
@@ -41,7 +48,7 @@ Points anchor_normals(const Points& centroids, const LevelSupport& support, cons
                       const ProgressStage& stage = {});
 
 // anchor_normals at the members of some clusters only: #W by 3, the rows of the points of
-// those clusters in ascending order. Each cluster's members are fitted together as in
+// those clusters, cluster by cluster (which[j]: the point of row j). Each cluster's members are fitted together as in
 // anchor_normals, so the rows are bitwise the same as there.
 // clusters: flags, #C (nonzero: evaluate that cluster's members).
 Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
