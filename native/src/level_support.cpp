@@ -52,7 +52,7 @@ inline void prefetch_line(const void* p) {
 template <class OffsetAt>
 void normals_at(Eigen::Index n, const Points* point_rows, const OffsetAt& offset_at, const Index* query_labels,
                 const Points& centroids, const LevelSupport& support, const Points& reference,
-                const ProgressStage& stage, Points& normals) {
+                const ProgressStage& stage, Points& normals, const std::vector<Mat3>* reference_rotation = nullptr) {
   const int k = support.neighbors;
   const bool has_reference = reference.rows() > 0;
   // Weights floored (plane_fit.h): the normal must be a smooth function of the anchors, since
@@ -91,7 +91,11 @@ void normals_at(Eigen::Index n, const Points* point_rows, const OffsetAt& offset
           const PlaneFit fit = fit_weighted_plane(centroids, nb, w.data(), k, x);
           if (fit.ok) nrm = fit.normal;
         }
-        if (has_reference && nrm.dot(reference.row(i).transpose()) < 0.0) nrm = -nrm;
+        if (has_reference) {
+          Vec3 r = reference.row(i).transpose();
+          if (reference_rotation) r = (*reference_rotation)[pending.cluster[l]] * r;
+          if (nrm.dot(r) < 0.0) nrm = -nrm;
+        }
         normals.row(i) = nrm.transpose();
       }
       pending.count = 0;
@@ -241,12 +245,13 @@ std::vector<Mat3> cluster_frames(const Points& centroids, const LevelSupport& su
 namespace {
 
 void anchor_normals_into(const Points& centroids, const LevelSupport& support, const Points& reference,
-                         const ProgressStage& stage, Points& normals) {
+                         const ProgressStage& stage, Points& normals,
+                         const std::vector<Mat3>* reference_rotation = nullptr) {
   const std::vector<Mat3> frames = cluster_frames(centroids, support);
   // The grouping is the one support.local is stored in, so row t is the query's own.
   normals_at(support.local.rows(), nullptr,
              [&](Eigen::Index, Index c, Index t) { return Vec3(frames[c] * support.local.row(t).transpose()); },
-             support.labels.data(), centroids, support, reference, stage, normals);
+             support.labels.data(), centroids, support, reference, stage, normals, reference_rotation);
 }
 
 }  // namespace
@@ -259,8 +264,8 @@ Points level_normals(const Points& level, const LevelSupport& support, const Poi
 }
 
 void level_normals(const Points& level, const LevelSupport& support, const Points& reference,
-                   const ProgressStage& stage, Points& normals) {
-  anchor_normals_into(support_centroids(level, support), support, reference, stage, normals);
+                   const ProgressStage& stage, Points& normals, const std::vector<Mat3>* reference_rotation) {
+  anchor_normals_into(support_centroids(level, support), support, reference, stage, normals, reference_rotation);
 }
 
 Points anchor_normals(const Points& centroids, const LevelSupport& support, const Points& reference,
@@ -292,8 +297,7 @@ Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& s
   return normals;
 }
 
-Points transported_references(const Points& original, const Points& edited, const Points& original_normals,
-                              const LevelSupport& support) {
+std::vector<Mat3> transported_rotations(const Points& original, const Points& edited, const LevelSupport& support) {
   const Points b0 = support_centroids(original, support);
   const Points b1 = support_centroids(edited, support);
   const int k = support.neighbors;
@@ -321,14 +325,7 @@ Points transported_references(const Points& original, const Points& edited, cons
       rotation[cc] = svd.matrixV() * d * svd.matrixU().transpose();
     }
   }, {}, 1024);
-  Points ref(original.rows(), 3);
-  parallel_for(static_cast<std::size_t>(original.rows()), [&](std::size_t b, std::size_t e) {
-    for (std::size_t ii = b; ii < e; ++ii) {
-      const auto i = static_cast<Eigen::Index>(ii);
-      ref.row(i) = (rotation[support.labels[i]] * original_normals.row(i).transpose()).transpose();
-    }
-  }, {}, 4096);
-  return ref;
+  return rotation;
 }
 
 }  // namespace pointscale

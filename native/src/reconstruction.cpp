@@ -8,19 +8,24 @@ namespace pointscale {
 
 namespace {
 
-// p: P^0 to start from, edited or not; reference: its normals' orientation.
+// p: P^0 to start from, edited or not. Level 0's normals are oriented by the stored ones,
+// turned by reference_rotation (per level-0 cluster) when the base was edited.
 Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points p,
-                                  Points reference, bool keep_levels, int upto, const ProgressCallback* progress) {
+                                  const std::vector<Mat3>* reference_rotation, bool keep_levels, int upto,
+                                  const ProgressCallback* progress) {
   const int k = model.bands();
   if (upto < 0 || upto > k) upto = k;
   const bool per_point = gains.cols() > 1;
   const ProgressStage all{progress, 0.0, 1.0};
   Reconstruction out;
   if (keep_levels) out.levels.push_back(p);
-  Points normals;  // alternates with reference, so that each level reuses the storage of the one before
+  // Level l's normals orient level l + 1's; the two buffers alternate so that each level
+  // reuses the storage of the one before (level 0 reads the stored normals in place).
+  Points normals, reference;
   for (int l = 0; l < upto; ++l) {
     const LevelSupport& s = model.support[l];
-    level_normals(p, s, reference, all.sub(double(l) / upto, double(l + 1) / upto), normals);
+    level_normals(p, s, l == 0 ? model.base_normals : reference, all.sub(double(l) / upto, double(l + 1) / upto),
+                  normals, l == 0 ? reference_rotation : nullptr);
     parallel_for(static_cast<std::size_t>(p.rows()), [&](std::size_t b, std::size_t e) {
       for (std::size_t ii = b; ii < e; ++ii) {
         const Eigen::Index i = static_cast<Eigen::Index>(ii);
@@ -40,13 +45,13 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
 Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
                            bool keep_levels, int upto, const ProgressCallback* progress) {
   if (base) return reconstruct_from_base(model, gains, *base, keep_levels, upto, progress);
-  return reconstruct_levels(model, gains, model.base, model.base_normals, keep_levels, upto, progress);
+  return reconstruct_levels(model, gains, model.base, nullptr, keep_levels, upto, progress);
 }
 
 Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points base,
                                      bool keep_levels, int upto, const ProgressCallback* progress) {
-  Points reference = transported_references(model.base, base, model.base_normals, model.support[0]);
-  return reconstruct_levels(model, gains, std::move(base), std::move(reference), keep_levels, upto, progress);
+  const std::vector<Mat3> rotation = transported_rotations(model.base, base, model.support[0]);
+  return reconstruct_levels(model, gains, std::move(base), &rotation, keep_levels, upto, progress);
 }
 
 }  // namespace pointscale

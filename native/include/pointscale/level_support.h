@@ -4,6 +4,8 @@
 // a point is the weighted least-squares plane normal (Eq. 3) of the nearby anchors. The cluster labels, each cluster's neighbour
 // clusters and kernel widths are cached at decomposition time, like a mesh's connectivity.
 #pragma once
+#include <vector>
+
 #include "pointscale/progress.h"
 #include "pointscale/types.h"
 
@@ -38,9 +40,12 @@ void attach_frames(const Points& centroids, const Points& positions, LevelSuppor
 Points level_normals(const Points& level, const LevelSupport& support, const Points& reference,
                      const ProgressStage& stage = {});
 
-// The same into `normals` (#P by 3), reusing its storage when it has the size already.
+// The same into `normals` (#P by 3), reusing its storage when it has the size already. With
+// reference_rotation (#C, from transported_rotations), point i is oriented by its reference
+// turned by its cluster's rotation.
 void level_normals(const Points& level, const LevelSupport& support, const Points& reference,
-                   const ProgressStage& stage, Points& normals);
+                   const ProgressStage& stage, Points& normals,
+                   const std::vector<Mat3>* reference_rotation = nullptr);
 
 // The same from the anchors' positions alone (#C by 3, support_centroids of the level): the
 // normals need nothing else, so a finished level can be dropped and its anchors kept.
@@ -71,12 +76,11 @@ Points support_normals(const Points& query, const Index* query_labels, const Poi
                        const LevelSupport& support, const Points& reference,
                        const ProgressStage& stage = {});
 
-// Per-point orientation references for an edited level 0: each stored oriented normal turned by
-// the rotation that best maps its cluster's neighbourhood onto the edited one (Kabsch), so the
-// sign stays right even where an edit turns the surface by more than 90 degrees. Unedited, the
-// rotations are the identity and the references are the stored normals.
-// original, edited  #P by 3; original_normals #P by 3 oriented. Returns #P by 3.
-Points transported_references(const Points& original, const Points& edited, const Points& original_normals,
-                              const LevelSupport& support);
+// Orientation references for an edited level 0: the rotation per cluster that best maps the
+// cluster's neighbourhood onto the edited one (Kabsch). Each stored oriented normal, turned by
+// its cluster's rotation, orients the edited level's normal, so the sign stays right even where
+// an edit turns the surface by more than 90 degrees. Unedited, the rotations are the identity.
+// original, edited  #P by 3. Returns #C rotations.
+std::vector<Mat3> transported_rotations(const Points& original, const Points& edited, const LevelSupport& support);
 
 }  // namespace pointscale
