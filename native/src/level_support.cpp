@@ -44,9 +44,12 @@ inline void prefetch_line(const void* p) {
 
 // support_normals with each query given by offset_at(i, c, t), its position relative to the
 // centroid of its cluster c (i: the query, t: its place in the grouping by cluster), so callers
-// that can compute it on the fly need not hold all of them (#Q by 3 doubles) at once.
-// point_rows: rows that offset_at reads by query index, to prefetch; null if it reads none. Works cluster by cluster: all members of a cluster are fitted
-// to the same neighbour clusters, gathered once.
+// that can compute it on the fly need not hold all of them (#Q by 3 doubles) at once. Works
+// cluster by cluster: all members of a cluster are fitted to the same neighbour clusters,
+// gathered once.
+// point_rows: rows that offset_at reads by query index, to prefetch; null if it reads none.
+// reference_rotation: if given, query i is oriented by its reference row turned by its
+// cluster's rotation (#C).
 // Writes into `normals`, whose storage is reused when it has n rows already (reconstruction
 // alternates two buffers: fresh pages cost it more than the copies it saves).
 template <class OffsetAt>
@@ -101,7 +104,8 @@ void normals_at(Eigen::Index n, const Points* point_rows, const OffsetAt& offset
       pending.count = 0;
     };
     // A cluster's members lie anywhere in the point order, and waiting for their rows from
-    // memory took most of this loop's time: fetch the rows of the cluster three ahead while this one works.
+    // memory took most of this loop's time: fetch the rows of the cluster three ahead while
+    // this one works.
     auto prefetch = [&](std::size_t cc) {
       if (cc >= clusters) return;
       for (Index t = groups.offsets[cc]; t < groups.offsets[cc + 1]; ++t) {

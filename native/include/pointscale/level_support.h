@@ -53,8 +53,8 @@ Points anchor_normals(const Points& centroids, const LevelSupport& support, cons
                       const ProgressStage& stage = {});
 
 // anchor_normals at the members of some clusters only: #W by 3, the rows of the points of
-// those clusters, cluster by cluster (which[j]: the point of row j). Each cluster's members are fitted together as in
-// anchor_normals, so the rows are bitwise the same as there.
+// those clusters, cluster by cluster (which[j]: the point of row j). Each cluster's members
+// are fitted together as in anchor_normals, so the rows are bitwise the same as there.
 // clusters: flags, #C (nonzero: evaluate that cluster's members).
 Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
                                   const std::vector<unsigned char>& clusters, IndexList& which);
