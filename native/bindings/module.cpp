@@ -183,9 +183,8 @@ PYBIND11_MODULE(_core, m) {
       // and the points go out in them (one pass each way fewer than doing it in NumPy).
       .def("reconstruct", [](const MultiscaleModel& s, const DoubleArray& gains, py::object base, bool keep_levels,
                              int upto, py::object progress, py::object origin) {
-        Eigen::MatrixXd g(gains.shape(0), gains.ndim() == 2 ? gains.shape(1) : 1);
-        std::copy(gains.data(), gains.data() + gains.size(), g.data());
-        g = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(gains.data(), g.rows(), g.cols());
+        const Eigen::MatrixXd g = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+            gains.data(), gains.shape(0), gains.ndim() == 2 ? gains.shape(1) : 1);
         Points edited;
         const bool has_base = !base.is_none();
         const bool has_origin = !origin.is_none();

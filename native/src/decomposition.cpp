@@ -204,13 +204,14 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     const Eigen::VectorXd h = options.kernel * local_spacing(q_index, 6);
 
     // Project P^l onto the MLS surface of Q^{l-1}, cluster by cluster, each cluster's points
-    // around one query at its centroid (clusters come in a spatial order).
+    // around one query at its centroid (clusters come in a spatial order). The same grouping
+    // lays out the frames' coordinates below.
+    LabelGroups groups = group_by_label(clusters.labels.data(), clusters.labels.size(),
+                                        static_cast<Index>(clusters.centroids.rows()));
     MlsResult projected;
     {
-      const IndexList order = group_by_label(clusters.labels.data(), clusters.labels.size(),
-                                             static_cast<Index>(clusters.centroids.rows())).members;
       MlsOptions mls = options.mls;
-      mls.order = &order;
+      mls.order = &groups.members;
       mls.near_support = &clusters.labels;
       projected = mls_project(fine, q_index, h, mls, stage.sub(0.1, 0.8));
     }
@@ -227,7 +228,8 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     projected.normals = Points();  // before the frames' local coordinates take as much
     const Points centroids = support_centroids(projected.positions, support);
     support.neighborhoods = knn_graph(SpatialIndex(centroids), support.neighbors);
-    attach_frames(centroids, projected.positions, support);
+    attach_frames(centroids, projected.positions, support, &groups);
+    groups = LabelGroups();
 
     Points coarse = std::move(projected.positions);
     Points normals;

@@ -180,7 +180,8 @@ Mat3 cluster_frame(const Points& centroids, const LevelSupport& support, Index c
 
 }  // namespace
 
-void attach_frames(const Points& centroids, const Points& positions, LevelSupport& support) {
+void attach_frames(const Points& centroids, const Points& positions, LevelSupport& support,
+                   const LabelGroups* groups) {
   const int k = support.neighbors;
   support.frames.assign(2 * static_cast<std::size_t>(support.clusters), 0);
   for (Index c = 0; c < support.clusters; ++c) {
@@ -205,14 +206,16 @@ void attach_frames(const Points& centroids, const Points& positions, LevelSuppor
     support.frames[2 * static_cast<std::size_t>(c) + 1] = b;
   }
   // In cluster order (level_support.h): row t for point members[t].
-  const LabelGroups groups = group_by_label(support.labels.data(), support.labels.size(), support.clusters);
+  const LabelGroups own = groups ? LabelGroups() : group_by_label(support.labels.data(), support.labels.size(),
+                                                                   support.clusters);
+  const LabelGroups& g = groups ? *groups : own;
   support.local.resize(positions.rows(), 3);
   parallel_for(static_cast<std::size_t>(support.clusters), [&](std::size_t b, std::size_t e) {
     for (std::size_t cc = b; cc < e; ++cc) {
       const Index c = static_cast<Index>(cc);
       const Mat3 f = cluster_frame(centroids, support, c);
-      for (Index t = groups.offsets[cc]; t < groups.offsets[cc + 1]; ++t) {
-        const Eigen::Index i = groups.members[static_cast<std::size_t>(t)];
+      for (Index t = g.offsets[cc]; t < g.offsets[cc + 1]; ++t) {
+        const Eigen::Index i = g.members[static_cast<std::size_t>(t)];
         support.local.row(t) = (f.transpose() * (positions.row(i) - centroids.row(c)).transpose()).transpose();
       }
     }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pointscale/progress.h"
+#include "pointscale/spatial_order.h"
 #include "pointscale/types.h"
 
 namespace pointscale {
@@ -33,8 +34,10 @@ void local_from_points(const Points& by_point, LevelSupport& support);
 // point is evaluated at that query position, which moves with the centroids only, so a point's
 // normal does not depend on the point itself: this keeps the offsets-along-normals condition
 // solvable even where detail is larger than the level's radius of curvature.
-// centroids #C by 3 from support_centroids(positions); positions #P by 3.
-void attach_frames(const Points& centroids, const Points& positions, LevelSupport& support);
+// centroids #C by 3 from support_centroids(positions); positions #P by 3. groups: the points
+// grouped by support.labels (group_by_label), if the caller has them already.
+void attach_frames(const Points& centroids, const Points& positions, LevelSupport& support,
+                   const LabelGroups* groups = nullptr);
 
 // Normals of a level from its points alone: centroids, then frames, then support_normals.
 Points level_normals(const Points& level, const LevelSupport& support, const Points& reference,
