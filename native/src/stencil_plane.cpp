@@ -9,16 +9,43 @@
 
 namespace pointscale {
 
+POINTSCALE_CLONES
 void PlaneStencil::assign(const Points& points, const Index* nb, int k, const Eigen::VectorXd& h,
                           const Vec3& origin) {
-  size = k;
-  x.resize(k); y.resize(k); z.resize(k); inv_h2.resize(k); scratch.resize(4 * static_cast<std::size_t>(k));
+  if (size != k) {
+    for (auto* v : {&x, &y, &z, &xx, &yy, &zz, &xy, &xz, &yz, &inv_h2, &e0, &gx, &gy, &gz}) v->resize(k);
+    scratch.resize(4 * static_cast<std::size_t>(k));
+    size = k;
+  }
+  double* __restrict px = x.data();
+  double* __restrict py = y.data();
+  double* __restrict pz = z.data();
+  double* __restrict ih2 = inv_h2.data();
+  for (int j = 0; j < k; ++j) {  // the gather; the rest vectorises
+    px[j] = points(nb[j], 0) - origin.x();
+    py[j] = points(nb[j], 1) - origin.y();
+    pz[j] = points(nb[j], 2) - origin.z();
+    ih2[j] = h(nb[j]);
+  }
+  double* __restrict pxx = xx.data();
+  double* __restrict pyy = yy.data();
+  double* __restrict pzz = zz.data();
+  double* __restrict pxy = xy.data();
+  double* __restrict pxz = xz.data();
+  double* __restrict pyz = yz.data();
+  double* __restrict pe0 = e0.data();
+  double* __restrict pgx = gx.data();
+  double* __restrict pgy = gy.data();
+  double* __restrict pgz = gz.data();
+#pragma omp simd
   for (int j = 0; j < k; ++j) {
-    x[j] = points(nb[j], 0) - origin.x();
-    y[j] = points(nb[j], 1) - origin.y();
-    z[j] = points(nb[j], 2) - origin.z();
-    const double hj = h(nb[j]);
-    inv_h2[j] = 1.0 / (hj * hj);
+    const double a = px[j], b = py[j], c = pz[j];
+    const double inv = 1.0 / (ih2[j] * ih2[j]);
+    ih2[j] = inv;
+    pxx[j] = a * a; pyy[j] = b * b; pzz[j] = c * c;
+    pxy[j] = a * b; pxz[j] = a * c; pyz[j] = b * c;
+    pe0[j] = (a * a + b * b + c * c) * inv;
+    pgx[j] = -2.0 * inv * a; pgy[j] = -2.0 * inv * b; pgz[j] = -2.0 * inv * c;
   }
 }
 
@@ -43,7 +70,17 @@ void stencil_covariances(PlaneStencil& stencil, const double* queries, int m, do
   const double* __restrict px = stencil.x.data();
   const double* __restrict py = stencil.y.data();
   const double* __restrict pz = stencil.z.data();
+  const double* __restrict pxx = stencil.xx.data();
+  const double* __restrict pyy = stencil.yy.data();
+  const double* __restrict pzz = stencil.zz.data();
+  const double* __restrict pxy = stencil.xy.data();
+  const double* __restrict pxz = stencil.xz.data();
+  const double* __restrict pyz = stencil.yz.data();
   const double* __restrict ih2 = stencil.inv_h2.data();
+  const double* __restrict e0 = stencil.e0.data();
+  const double* __restrict gx = stencil.gx.data();
+  const double* __restrict gy = stencil.gy.data();
+  const double* __restrict gz = stencil.gz.data();
   double* __restrict e = stencil.scratch.data();  // #K by query_lanes
   // Whole groups of four queries: lanes are queries, not neighbours. Every member of the
   // cluster meets the same neighbours, so neighbour j is one broadcast value and no horizontal
@@ -51,23 +88,23 @@ void stencil_covariances(PlaneStencil& stencil, const double* queries, int m, do
   constexpr int query_lanes = 4;
   const int grouped = m - m % query_lanes;
   for (int first = 0; first < grouped; first += query_lanes) {
-    alignas(32) double qx[query_lanes], qy[query_lanes], qz[query_lanes], min_e[query_lanes];
+    alignas(32) double qx[query_lanes], qy[query_lanes], qz[query_lanes], q2[query_lanes], min_e[query_lanes];
     for (int l = 0; l < query_lanes; ++l) {
       qx[l] = queries[3 * (first + l)];
       qy[l] = queries[3 * (first + l) + 1];
       qz[l] = queries[3 * (first + l) + 2];
+      q2[l] = qx[l] * qx[l] + qy[l] * qy[l] + qz[l] * qz[l];
       min_e[l] = std::numeric_limits<double>::infinity();
     }
     for (int j = 0; j < k; ++j) {
 #pragma omp simd
       for (int l = 0; l < query_lanes; ++l) {
-        const double dx = px[j] - qx[l], dy = py[j] - qy[l], dz = pz[j] - qz[l];
-        const double v = (dx * dx + dy * dy + dz * dz) * ih2[j];
+        const double v = e0[j] + ih2[j] * q2[l] + gx[j] * qx[l] + gy[j] * qy[l] + gz[j] * qz[l];
         e[j * query_lanes + l] = v;
         min_e[l] = v < min_e[l] ? v : min_e[l];
       }
     }
-    // Sums relative to each query, as fit_weighted_plane takes them.
+    // Sums about the origin: the neighbours' products are the stencil's, shared by all queries.
     alignas(32) double sw[query_lanes] = {}, sx[query_lanes] = {}, sy[query_lanes] = {}, sz[query_lanes] = {},
                        sxx[query_lanes] = {}, syy[query_lanes] = {}, szz[query_lanes] = {}, sxy[query_lanes] = {},
                        sxz[query_lanes] = {}, syz[query_lanes] = {};
@@ -76,11 +113,9 @@ void stencil_covariances(PlaneStencil& stencil, const double* queries, int m, do
       for (int l = 0; l < query_lanes; ++l) {
         double w = exp_nonpositive(min_e[l] - e[j * query_lanes + l]);
         w = w > weight_floor ? w : weight_floor;
-        const double dx = px[j] - qx[l], dy = py[j] - qy[l], dz = pz[j] - qz[l];
-        const double wx = w * dx, wy = w * dy, wz = w * dz;
-        sw[l] += w; sx[l] += wx; sy[l] += wy; sz[l] += wz;
-        sxx[l] += wx * dx; syy[l] += wy * dy; szz[l] += wz * dz;
-        sxy[l] += wx * dy; sxz[l] += wx * dz; syz[l] += wy * dz;
+        sw[l] += w; sx[l] += w * px[j]; sy[l] += w * py[j]; sz[l] += w * pz[j];
+        sxx[l] += w * pxx[j]; syy[l] += w * pyy[j]; szz[l] += w * pzz[j];
+        sxy[l] += w * pxy[j]; sxz[l] += w * pxz[j]; syz[l] += w * pyz[j];
       }
     }
     for (int l = 0; l < query_lanes; ++l) {
@@ -93,11 +128,11 @@ void stencil_covariances(PlaneStencil& stencil, const double* queries, int m, do
   // consistency iteration, all go this way).
   for (int i = grouped; i < m; ++i) {
     const double qx = queries[3 * i], qy = queries[3 * i + 1], qz = queries[3 * i + 2];
+    const double q2 = qx * qx + qy * qy + qz * qz;
     double min_e = std::numeric_limits<double>::infinity();
 #pragma omp simd reduction(min : min_e)
     for (int j = 0; j < k; ++j) {
-      const double dx = px[j] - qx, dy = py[j] - qy, dz = pz[j] - qz;
-      e[j] = (dx * dx + dy * dy + dz * dz) * ih2[j];
+      e[j] = e0[j] + ih2[j] * q2 + gx[j] * qx + gy[j] * qy + gz[j] * qz;
       min_e = e[j] < min_e ? e[j] : min_e;
     }
     double sw = 0, sx = 0, sy = 0, sz = 0, sxx = 0, syy = 0, szz = 0, sxy = 0, sxz = 0, syz = 0;
@@ -105,11 +140,9 @@ void stencil_covariances(PlaneStencil& stencil, const double* queries, int m, do
     for (int j = 0; j < k; ++j) {
       double w = exp_nonpositive(min_e - e[j]);
       w = w > weight_floor ? w : weight_floor;
-      const double dx = px[j] - qx, dy = py[j] - qy, dz = pz[j] - qz;
-      const double wx = w * dx, wy = w * dy, wz = w * dz;
-      sw += w; sx += wx; sy += wy; sz += wz;
-      sxx += wx * dx; syy += wy * dy; szz += wz * dz;
-      sxy += wx * dy; sxz += wx * dz; syz += wy * dz;
+      sw += w; sx += w * px[j]; sy += w * py[j]; sz += w * pz[j];
+      sxx += w * pxx[j]; syy += w * pyy[j]; szz += w * pzz[j];
+      sxy += w * pxy[j]; sxz += w * pxz[j]; syz += w * pyz[j];
     }
     covariance_from_sums(sw, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz, cov + 6 * i, trace[i], valid[i]);
   }
