@@ -14,7 +14,8 @@ struct Reconstruction {
 };
 
 // gains   k by 1 (per band) or k by #P (per point); band l is scaled by its gain
-// base    #P by 3 edited P^0, or nullptr for the stored one
+// base    #P by 3 edited P^0, or nullptr for the stored one (whose normals are then read from
+//         the model, bit for bit what fitting them again gives)
 // upto    reconstruct levels 0..upto only (upto <= k)
 Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
                            bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr);
