@@ -109,9 +109,14 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
         const double step = (next - foot).norm();
         // Near sharp features the foot point can swing back and forth: damp a growing step.
         if (step > last_step) damping = std::max(damping * 0.5, 1.0 / 64.0);
+        // With steps shrinking at a steady rate r, the foot is within r / (1 - r) x step of
+        // where the iteration goes: stop once that is below the tolerance too (most points
+        // get there a fit earlier than by their step alone).
+        const double rate = it > 0 && damping == 1.0 ? step / last_step : 1.0;
         last_step = step;
         foot += damping * (next - foot);
-        if (step <= options.tolerance * nearest_h) { converged = true; break; }
+        const double limit = options.tolerance * nearest_h;
+        if (step <= limit || (rate < 0.5 && rate * step <= (1.0 - rate) * limit)) { converged = true; break; }
       }
       foot += p;
       out.positions.row(static_cast<Eigen::Index>(i)) = foot.transpose();

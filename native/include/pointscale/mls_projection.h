@@ -10,7 +10,8 @@ namespace pointscale {
 
 struct MlsOptions {
   int neighbors = 24;         // support points in each plane fit
-  double tolerance = 1e-7;    // convergence: foot-point step below tolerance x h
+  double tolerance = 1e-7;    // convergence: the foot point within tolerance x h of its limit, by its
+                              // step, or by step x r / (1 - r) while steps shrink at a rate r < 0.5
   int max_iterations = 30;    // iteration cap per point
   // Thin sheets: given the support points' normals (#S by 3, sign ignored), a support point's
   // weight also falls with the distance of the projected point x from it along its own normal,

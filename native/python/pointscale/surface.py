@@ -14,6 +14,9 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
 
     points  (n, 3) to project;  onto (m, 3) samples of the surface
     kernel  kernel width as a multiple of the local sample spacing of `onto`
+    tolerance  stop once a point is within tolerance x kernel width of where its iteration
+            goes: its last step is that small, or its steps shrink at a steady rate r < 0.5 and
+            step x r / (1 - r) is; max_iterations caps the iterations
     near    optional (n,) index into `onto` of a sample near each point, such as the labels
             from decimate(points) when `onto` is its centroids: the points around one sample
             then share one neighbour query. Only a speed-up; the result does not change.
