@@ -24,6 +24,7 @@ __attribute__((always_inline)) inline void batched_smallest_eigenvectors(const d
   alignas(64) double a0[eigen_lanes], a1[eigen_lanes], a2[eigen_lanes], a3[eigen_lanes], a4[eigen_lanes],
       a5[eigen_lanes];
   alignas(64) double done[eigen_lanes];  // 1 once converged (or no plane)
+  alignas(64) double last[eigen_lanes];  // 1 once the test passed: one squaring to go
 #pragma omp simd
   for (int l = 0; l < eigen_lanes; ++l) {
     const double xx = cov[0][l], yy = cov[1][l], zz = cov[2][l], xy = cov[3][l], xz = cov[4][l], yz = cov[5][l];
@@ -45,6 +46,7 @@ __attribute__((always_inline)) inline void batched_smallest_eigenvectors(const d
     a5[l] = plane ? b5 * inv : 0.0;
     ok[l] = plane ? 1.0 : 0.0;
     done[l] = plane ? 0.0 : 1.0;
+    last[l] = 0.0;
   }
   for (int i = 0; i < 10; ++i) {
     // (No `omp simd reduction` here: its private copies stop GCC from vectorising this loop.)
@@ -64,8 +66,10 @@ __attribute__((always_inline)) inline void batched_smallest_eigenvectors(const d
       a3[l] = frozen ? xy : c3;
       a4[l] = frozen ? xz : c4;
       a5[l] = frozen ? yz : c5;
-      const bool converged = frozen | (tr * tr - norm2 <= 1e-30 * tr * tr);
-      done[l] = converged ? 1.0 : 0.0;
+      // As dominant_by_squaring: one squaring after the test passes, then frozen.
+      const bool passed = tr * tr - norm2 <= detail::rank_one_test * tr * tr;
+      done[l] = frozen | (last[l] != 0.0) ? 1.0 : 0.0;
+      last[l] = passed ? 1.0 : 0.0;
     }
     bool all_done = true;
     for (int l = 0; l < eigen_lanes; ++l) all_done = all_done && done[l] != 0.0;

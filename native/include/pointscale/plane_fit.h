@@ -63,20 +63,28 @@ inline double max_abs6(const double* m) {
 }
 
 // Squares the symmetric matrix a (six entries) until it is rank one to working precision
-// (tr^2 = |A|^2 only then) and returns its dominant column, normalised. Each squaring squares
-// the ratio of its two largest eigenvalues. The iterates are positive semi-definite after the
-// first squaring, so their trace bounds every entry: rescaling by the power of two nearest
-// below 1 / trace keeps them in range, exactly and without a division on the critical path.
+// and returns its dominant column, normalised. Each squaring squares the ratio d of its two
+// largest eigenvalues, and tr^2 - |A|^2 is about 2 d tr^2. That difference is only known to a
+// few ulp of tr^2, so the test asks for d below about 5e-13, which rounding cannot fake, and
+// one more squaring takes d below 1e-24: at most one squaring more than needed, where a test
+// at the rounding level passed by chance (about half the time per squaring) and took up to
+// five more. The iterates are positive semi-definite after the first squaring, so their trace
+// bounds every entry: rescaling by the power of two nearest below 1 / trace keeps them in
+// range, exactly and without a division on the critical path.
+constexpr double rank_one_test = 1e-12;
+
 inline Vec3 dominant_by_squaring(double* a) {
+  bool last = false;  // the test passed: this squaring is the final one
   for (int i = 0; i < 10; ++i) {
     const double xx = a[0], yy = a[1], zz = a[2], xy = a[3], xz = a[4], yz = a[5];
     const double b[6] = {xx * xx + xy * xy + xz * xz, xy * xy + yy * yy + yz * yz, xz * xz + yz * yz + zz * zz,
                          xx * xy + xy * yy + xz * yz, xx * xz + xy * yz + xz * zz, xy * xz + yy * yz + yz * zz};
     const double inv = inverse_power_of_two(b[0] + b[1] + b[2]);
     for (int j = 0; j < 6; ++j) a[j] = b[j] * inv;
+    if (last) break;
     const double tr = a[0] + a[1] + a[2];
     const double norm2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2] + 2.0 * (a[3] * a[3] + a[4] * a[4] + a[5] * a[5]);
-    if (tr * tr - norm2 <= 1e-30 * tr * tr) break;
+    last = tr * tr - norm2 <= rank_one_test * tr * tr;
   }
   const Vec3 cols[3] = {Vec3(a[0], a[3], a[4]), Vec3(a[3], a[1], a[5]), Vec3(a[4], a[5], a[2])};
   int best = 0;
