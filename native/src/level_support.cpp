@@ -42,25 +42,32 @@ inline void prefetch_line(const void* p) {
 #endif
 }
 
-// support_normals with each query given by offset_at(i, c, t), its position relative to the
-// centroid of its cluster c (i: the query, t: its place in the grouping by cluster), so callers
-// that can compute it on the fly need not hold all of them (#Q by 3 doubles) at once. Works
-// cluster by cluster: all members of a cluster are fitted to the same neighbour clusters,
-// gathered once.
-// point_rows: rows that offset_at reads by query index, to prefetch; null if it reads none.
+// support_normals with the queries of each cluster given by
+// fill_queries(c, t, members, m, queries): the m queries members[0..m) of cluster c (t: the
+// place of the first in the grouping by cluster) as positions relative to the centroid of c,
+// written to queries (#m by 3), so that callers that can compute them on the fly need not
+// hold all of them (#Q by 3 doubles) at once, and can work out per cluster what its queries
+// share (its frame). Works cluster by cluster: all members of a cluster are fitted to the
+// same neighbour clusters, gathered once.
+// point_rows: rows that fill_queries reads by query index, to prefetch; null if it reads none.
 // reference_rotation: if given, query i is oriented by its reference row turned by its
 // cluster's rotation (#C).
+// groups: the queries grouped by query_labels (group_by_label, or any grouping with the same
+// groups), if the caller has them already.
 // Writes into `normals`, whose storage is reused when it has n rows already (reconstruction
 // alternates two buffers: fresh pages cost it more than the copies it saves).
-template <class OffsetAt>
-void normals_at(Eigen::Index n, const Points* point_rows, const OffsetAt& offset_at, const Index* query_labels,
+template <class FillQueries>
+void normals_at(Eigen::Index n, const Points* point_rows, const FillQueries& fill_queries, const Index* query_labels,
                 const Points& centroids, const LevelSupport& support, const Points& reference,
-                const ProgressStage& stage, Points& normals, const std::vector<Mat3>* reference_rotation = nullptr) {
+                const ProgressStage& stage, Points& normals, const std::vector<Mat3>* reference_rotation = nullptr,
+                const LabelGroups* cached_groups = nullptr) {
   const int k = support.neighbors;
   const bool has_reference = reference.rows() > 0;
   // Weights floored (plane_fit.h): the normal must be a smooth function of the anchors, since
   // reconstruction re-evaluates it, also at outliers far from them.
-  const LabelGroups groups = group_by_label(query_labels, static_cast<std::size_t>(n), support.clusters);
+  const LabelGroups own = cached_groups ? LabelGroups()
+                                        : group_by_label(query_labels, static_cast<std::size_t>(n), support.clusters);
+  const LabelGroups& groups = cached_groups ? *cached_groups : own;
   normals.resize(n, 3);
   const std::size_t clusters = static_cast<std::size_t>(support.clusters);
   const std::size_t chunk = std::max<std::size_t>(1, 512 * clusters / std::max<std::size_t>(1, n));
@@ -126,10 +133,7 @@ void normals_at(Eigen::Index n, const Points* point_rows, const OffsetAt& offset
       stencil.assign(centroids, nb, k, support.h, centroids.row(c).transpose());
       const auto mm = static_cast<std::size_t>(m);
       queries.resize(3 * mm); cov.resize(6 * mm); trace.resize(mm); valid.resize(mm);
-      for (int t = 0; t < m; ++t) {
-        const Vec3 q = offset_at(members[t], c, groups.offsets[cc] + t);
-        queries[3 * t] = q.x(); queries[3 * t + 1] = q.y(); queries[3 * t + 2] = q.z();
-      }
+      fill_queries(c, groups.offsets[cc], members, m, queries.data());
       stencil_covariances(stencil, queries.data(), m, weight_floor, cov.data(), trace.data(), valid.data());
       for (int t = 0; t < m; ++t) {
         const int l = pending.count++;
@@ -154,7 +158,10 @@ Points support_normals(const Points& query, const Index* query_labels, const Poi
                        const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
   Points normals;
   normals_at(query.rows(), &query,
-             [&](Eigen::Index i, Index c, Index) { return Vec3((query.row(i) - centroids.row(c)).transpose()); },
+             [&](Index c, Index, const Index* members, int m, double* q) {
+               for (int t = 0; t < m; ++t)
+                 for (int a = 0; a < 3; ++a) q[3 * t + a] = query(members[t], a) - centroids(c, a);
+             },
              query_labels, centroids, support, reference, stage, normals);
   return normals;
 }
@@ -239,26 +246,27 @@ void local_from_points(const Points& by_point, LevelSupport& support) {
 
 namespace {
 
-std::vector<Mat3> cluster_frames(const Points& centroids, const LevelSupport& support) {
-  std::vector<Mat3> frames(static_cast<std::size_t>(support.clusters));
-  parallel_for(frames.size(), [&](std::size_t b, std::size_t e) {
-    for (std::size_t c = b; c < e; ++c) frames[c] = cluster_frame(centroids, support, static_cast<Index>(c));
-  }, {}, 4096);
-  return frames;
+// The queries of cluster c from their frame coordinates (rows row_of(t) of support.local),
+// turned into the cluster's frame, worked out once per cluster.
+template <class RowOf>
+void frame_queries(const Points& centroids, const LevelSupport& support, Index c, int m, const RowOf& row_of,
+                   double* q) {
+  const Mat3 f = cluster_frame(centroids, support, c);
+  for (int t = 0; t < m; ++t) {
+    const Vec3 v = f * support.local.row(row_of(t)).transpose();
+    q[3 * t] = v.x(); q[3 * t + 1] = v.y(); q[3 * t + 2] = v.z();
+  }
 }
-
-}  // namespace
-
-namespace {
 
 void anchor_normals_into(const Points& centroids, const LevelSupport& support, const Points& reference,
                          const ProgressStage& stage, Points& normals,
-                         const std::vector<Mat3>* reference_rotation = nullptr) {
-  const std::vector<Mat3> frames = cluster_frames(centroids, support);
+                         const std::vector<Mat3>* reference_rotation = nullptr, const LabelGroups* groups = nullptr) {
   // The grouping is the one support.local is stored in, so row t is the query's own.
   normals_at(support.local.rows(), nullptr,
-             [&](Eigen::Index, Index c, Index t) { return Vec3(frames[c] * support.local.row(t).transpose()); },
-             support.labels.data(), centroids, support, reference, stage, normals, reference_rotation);
+             [&](Index c, Index first, const Index*, int m, double* q) {
+               frame_queries(centroids, support, c, m, [&](int t) { return first + t; }, q);
+             },
+             support.labels.data(), centroids, support, reference, stage, normals, reference_rotation, groups);
 }
 
 }  // namespace
@@ -271,8 +279,16 @@ Points level_normals(const Points& level, const LevelSupport& support, const Poi
 }
 
 void level_normals(const Points& level, const LevelSupport& support, const Points& reference,
-                   const ProgressStage& stage, Points& normals, const std::vector<Mat3>* reference_rotation) {
-  anchor_normals_into(support_centroids(level, support), support, reference, stage, normals, reference_rotation);
+                   const ProgressStage& stage, Points& normals, const std::vector<Mat3>* reference_rotation,
+                   const LabelGroups* groups, Points* centroids) {
+  if (!centroids) {
+    anchor_normals_into(support_centroids(level, support), support, reference, stage, normals, reference_rotation,
+                        groups);
+    return;
+  }
+  centroids->resize(support.clusters, 3);
+  for (Index c = 0; c < support.clusters; ++c) centroids->row(c) = level.row(support.anchors[c]);
+  anchor_normals_into(*centroids, support, reference, stage, normals, reference_rotation, groups);
 }
 
 Points anchor_normals(const Points& centroids, const LevelSupport& support, const Points& reference,
@@ -296,10 +312,11 @@ Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& s
       labels.push_back(c);
     }
   }
-  const std::vector<Mat3> frames = cluster_frames(centroids, support);
   Points normals;
   normals_at(static_cast<Eigen::Index>(which.size()), nullptr,
-             [&](Eigen::Index j, Index c, Index) { return Vec3(frames[c] * support.local.row(rows[j]).transpose()); },
+             [&](Index c, Index, const Index* members, int m, double* q) {
+               frame_queries(centroids, support, c, m, [&](int t) { return rows[members[t]]; }, q);
+             },
              labels.data(), centroids, support, Points(), {}, normals);
   return normals;
 }

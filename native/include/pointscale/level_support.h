@@ -45,10 +45,13 @@ Points level_normals(const Points& level, const LevelSupport& support, const Poi
 
 // The same into `normals` (#P by 3), reusing its storage when it has the size already. With
 // reference_rotation (#C, from transported_rotations), point i is oriented by its reference
-// turned by its cluster's rotation.
+// turned by its cluster's rotation. For calls over and over (Reconstructor), groups: the points
+// grouped by support.labels, the way support.local is stored (group_by_label, or the same
+// groups with the members renumbered alike), and centroids: storage for the anchors' rows.
 void level_normals(const Points& level, const LevelSupport& support, const Points& reference,
                    const ProgressStage& stage, Points& normals,
-                   const std::vector<Mat3>* reference_rotation = nullptr);
+                   const std::vector<Mat3>* reference_rotation = nullptr, const LabelGroups* groups = nullptr,
+                   Points* centroids = nullptr);
 
 // The same from the anchors' positions alone (#C by 3, support_centroids of the level): the
 // normals need nothing else, so a finished level can be dropped and its anchors kept.
