@@ -54,6 +54,17 @@ def test_reconstruct_rejects_a_base_of_the_wrong_length(dec):
         ps.reconstruct(dec, base=np.full_like(GOOD, np.nan))
 
 
+def test_reconstructor_rejects_what_reconstruct_rejects(dec):
+    solver = ps.Reconstructor(dec)
+    for gains in ([1, 1, 1], np.ones((2, 5)), [1, np.nan]):
+        with pytest.raises(ValueError, match="gains"):
+            solver.reconstruct(gains=gains)
+    with pytest.raises(ValueError, match="base"):
+        solver.reconstruct(base=GOOD[:-1])
+    with pytest.raises(ValueError, match="Decomposition"):
+        ps.Reconstructor(GOOD)
+
+
 def test_other_functions_reject_bad_input(dec):
     with pytest.raises(ValueError, match="t must be"):
         ps.blend(dec, 5)

@@ -83,3 +83,16 @@ def test_results_do_not_depend_on_the_thread_count():
     assert np.array_equal(one.details, two.details)
     assert np.array_equal(one.base, two.base)
     assert np.array_equal(ps.reconstruct(one), ps.reconstruct(two))
+
+
+def test_a_reconstructor_called_from_several_threads_gives_each_its_own_result():
+    from concurrent.futures import ThreadPoolExecutor
+    points = ps.shapes.bumpy_sphere(20000)
+    dec = ps.decompose(points, levels=4)
+    solver = ps.Reconstructor(dec)
+    gains = [np.array([1.0, g, 2.0 - g]) for g in np.linspace(0.0, 2.0, 8)]
+    expected = [ps.reconstruct(dec, gains=g) for g in gains]
+    with ThreadPoolExecutor(4) as pool:
+        results = list(pool.map(lambda g: solver.reconstruct(gains=g), gains))
+    for got, want in zip(results, expected):
+        assert np.array_equal(got, want)

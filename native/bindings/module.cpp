@@ -11,6 +11,7 @@
 #include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
 #include "pointscale/reconstruction.h"
+#include "pointscale/reconstructor.h"
 #include "pointscale/sample_spacing.h"
 #include "pointscale/spatial_order.h"
 
@@ -207,6 +208,37 @@ PYBIND11_MODULE(_core, m) {
         return py::object(py::make_tuple(py::cast(r.levels), py::cast(r.normals)));
       }, py::arg("gains"), py::arg("base") = py::none(), py::arg("keep_levels") = false, py::arg("upto") = -1,
          py::arg("progress") = py::none(), py::arg("origin") = py::none());
+
+  // The solver for repeated reconstructions (reconstructor.h); the pointscale package checks
+  // the arguments, these checks only keep a wrong call from reading out of bounds.
+  py::class_<Reconstructor>(m, "Reconstructor")
+      .def(py::init([](const MultiscaleModel& model) {
+        return without_gil([&] { return std::make_unique<Reconstructor>(model); });
+      }))
+      .def("reconstruct", [](Reconstructor& r, const DoubleArray& gains, py::object base, py::object progress,
+                             py::object origin) {
+        const Eigen::Index n = r.points();
+        const py::ssize_t cols = gains.ndim() == 2 ? gains.shape(1) : 1;
+        if (gains.ndim() < 1 || gains.ndim() > 2 || gains.shape(0) != r.bands() || (cols != 1 && cols != n))
+          throw std::invalid_argument("gains must be (k,) or (k, n)");
+        const Eigen::MatrixXd g = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+            gains.data(), gains.shape(0), cols);
+        DoubleArray b;
+        if (!base.is_none()) {
+          b = base.cast<DoubleArray>();
+          if (b.ndim() != 2 || b.shape(0) != n || b.shape(1) != 3) throw std::invalid_argument("base must be (n, 3)");
+        }
+        Vec3 o = Vec3::Zero();
+        if (!origin.is_none()) {
+          const DoubleArray oa = origin.cast<DoubleArray>();
+          if (oa.size() != 3) throw std::invalid_argument("expected an origin of 3 numbers");
+          o = Vec3(oa.data()[0], oa.data()[1], oa.data()[2]);
+        }
+        const double* base_rows = base.is_none() ? nullptr : b.data();
+        PythonProgress p(progress);
+        return without_gil([&] { return r.reconstruct(g, base_rows, o, p.get()); });
+      }, py::arg("gains"), py::arg("base") = py::none(), py::arg("progress") = py::none(),
+         py::arg("origin") = py::none());
 
   m.def("decompose", [](const DoubleArray& points, const DoubleArray& origin, py::object normals, int levels,
                         double decimation, double kernel, int neighbors, double tolerance, int max_iterations,

@@ -6,32 +6,30 @@
 
 namespace pointscale {
 
-namespace {
-
-// p: P^0 to start from. Edited, level 0's normals are computed and oriented by the stored
-// ones turned by reference_rotation (per level-0 cluster); unedited, they are the stored ones.
-Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points p,
-                                  bool edited, const std::vector<Mat3>* reference_rotation, bool keep_levels,
-                                  int upto, const ProgressCallback* progress) {
+void reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p, bool edited,
+                                 const std::vector<Mat3>* reference_rotation, Reconstruction* kept, int upto,
+                                 const ProgressCallback* progress, ReconstructionWorkspace* workspace) {
   const int k = model.bands();
   if (upto < 0 || upto > k) upto = k;
   const bool per_point = gains.cols() > 1;
   const ProgressStage all{progress, 0.0, 1.0};
-  Reconstruction out;
-  if (keep_levels) out.levels.push_back(p);
+  if (kept) kept->levels.push_back(p);
   // Level l's normals orient level l + 1's. They are computed into whichever of two buffers
   // the level before does not hold, so each level reuses the storage of the one before it.
   // The unedited base's normals are the stored ones, bit for bit (decompose made them with
   // the same function and oriented them), so level 0 then reads them in place.
-  Points buffers[2];
+  ReconstructionWorkspace own;
+  ReconstructionWorkspace& ws = workspace ? *workspace : own;
   const Points* previous = &model.base_normals;
   for (int l = 0; l < upto; ++l) {
     const LevelSupport& s = model.support[l];
     const ProgressStage stage = all.sub(double(l) / upto, double(l + 1) / upto);
     const Points* normals = previous;
     if (l > 0 || edited) {
-      Points& into = previous == &buffers[0] ? buffers[1] : buffers[0];
-      level_normals(p, s, *previous, stage, into, l == 0 ? reference_rotation : nullptr);
+      Points& into = previous == &ws.normals[0] ? ws.normals[1] : ws.normals[0];
+      const LabelGroups* groups = static_cast<std::size_t>(l) < ws.groups.size() ? &ws.groups[l] : nullptr;
+      level_normals(p, s, *previous, stage, into, l == 0 ? reference_rotation : nullptr, groups,
+                    workspace ? &ws.centroids : nullptr);
       normals = &into;
     }
     const Points& nrm = *normals;
@@ -42,9 +40,19 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
         p.row(i) += (g * model.details(l, i)) * nrm.row(i);
       }
     }, {}, 4096);
-    if (keep_levels) { out.levels.push_back(p); out.normals.push_back(nrm); }
+    if (kept) { kept->levels.push_back(p); kept->normals.push_back(nrm); }
     previous = normals;
   }
+}
+
+namespace {
+
+Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points p, bool edited,
+                                  const std::vector<Mat3>* reference_rotation, bool keep_levels, int upto,
+                                  const ProgressCallback* progress) {
+  Reconstruction out;
+  reconstruct_levels_in_place(model, gains, p, edited, reference_rotation, keep_levels ? &out : nullptr, upto,
+                              progress, nullptr);
   out.positions = std::move(p);
   return out;
 }

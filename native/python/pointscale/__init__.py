@@ -4,7 +4,8 @@ A surface becomes a smooth base P^0 and a stack of signed normal-displacement ba
 detail can be filtered band by band, carried along a deformed base, or moved between models.
 """
 from ._core import Cancelled
-from .multiscale import Decomposition, blend, coarse_base_warning, decompose, load, reconstruct, reconstruct_levels
+from .multiscale import (Decomposition, Reconstructor, blend, coarse_base_warning, decompose, load, reconstruct,
+                         reconstruct_levels)
 from .surface import decimate, estimate_normals, project
 from .operators import (Morph, decompose_rayshoot, diffusion_levels, ellipsoid_base, encode, morph, project_sheets,
                         rays_missed_points, shoot_rays, smooth_diffusion)
@@ -12,7 +13,8 @@ from . import io, shapes
 
 __version__ = "0.1.0"
 __all__ = [
-    "Cancelled", "Decomposition", "blend", "coarse_base_warning", "decimate", "decompose", "estimate_normals", "load",
+    "Cancelled", "Decomposition", "Reconstructor", "blend", "coarse_base_warning", "decimate", "decompose",
+    "estimate_normals", "load",
     "io", "project", "reconstruct", "reconstruct_levels", "shapes",
     "Morph", "decompose_rayshoot", "diffusion_levels", "ellipsoid_base", "encode", "morph", "project_sheets",
     "rays_missed_points", "shoot_rays", "smooth_diffusion",

@@ -248,6 +248,27 @@ def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None) -> 
     return dec._model.reconstruct(g, b, False, -1, as_callback(progress), dec.origin)
 
 
+class Reconstructor:
+    """reconstruct() for one decomposition over and over, as an editing session calls it.
+
+    Holds the model in a spatially coherent point order, each level's grouping by cluster and
+    the working storage (about the decomposition's size again), so that a call costs the fits
+    and little else. Results are bit for bit those of reconstruct(dec, gains, base). Calls on
+    one Reconstructor run one at a time; use reconstruct() for a one-off call.
+    """
+
+    def __init__(self, dec: Decomposition):
+        _check_decomposition(dec)
+        self._dec = dec
+        self._core = _core.Reconstructor(dec._model)
+
+    def reconstruct(self, gains=None, base=None, *, progress=None) -> np.ndarray:
+        """As pointscale.reconstruct(dec, gains, base): the finest level, (n, 3)."""
+        g = _gains_array(self._dec, gains)
+        b = _base_array(self._dec, base)
+        return self._core.reconstruct(g, b, as_callback(progress), self._dec.origin)
+
+
 def reconstruct_levels(dec: Decomposition, gains=None, base=None) -> np.ndarray:
     """Every level P^0..P^k rebuilt like reconstruct(): (k+1, n, 3)."""
     _check_decomposition(dec)

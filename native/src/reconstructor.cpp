@@ -1,0 +1,92 @@
+#include "pointscale/reconstructor.h"
+
+#include <numeric>
+
+#include "pointscale/parallel.h"
+#include "pointscale/spatial_order.h"
+
+namespace pointscale {
+
+Reconstructor::Reconstructor(const MultiscaleModel& model) {
+  const Eigen::Index n = model.base.rows();
+  const int k = model.bands();
+  // Level 0's cluster order: clusters are numbered along the decimation's split tree, so it is
+  // a spatial order, and level 0's fits read and write consecutive rows.
+  if (k > 0) {
+    order_ = group_by_label(model.support[0].labels.data(), static_cast<std::size_t>(n), model.support[0].clusters)
+                 .members;
+  } else {
+    order_.resize(static_cast<std::size_t>(n));
+    std::iota(order_.begin(), order_.end(), 0);
+  }
+  IndexList rank(order_.size());
+  for (std::size_t r = 0; r < order_.size(); ++r) rank[order_[r]] = static_cast<Index>(r);
+
+  model_.base.resize(n, 3);
+  model_.base_normals.resize(n, 3);
+  model_.details.resize(k, n);
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+    for (std::size_t r = b; r < e; ++r) {
+      const Eigen::Index i = order_[r], row = static_cast<Eigen::Index>(r);
+      model_.base.row(row) = model.base.row(i);
+      model_.base_normals.row(row) = model.base_normals.row(i);
+      model_.details.col(row) = model.details.col(i);
+    }
+  }, {}, 4096);
+
+  model_.support.resize(static_cast<std::size_t>(k));
+  workspace_.groups.resize(static_cast<std::size_t>(k));
+  for (int l = 0; l < k; ++l) {
+    const LevelSupport& from = model.support[l];
+    LevelSupport& to = model_.support[l];
+    to.clusters = from.clusters;
+    to.neighbors = from.neighbors;
+    to.neighborhoods = from.neighborhoods;
+    to.h = from.h;
+    to.frames = from.frames;
+    to.local = from.local;  // rows in cluster order, which the renumbering below keeps
+    to.labels.resize(from.labels.size());
+    for (std::size_t r = 0; r < order_.size(); ++r) to.labels[r] = from.labels[order_[r]];
+    to.anchors.resize(from.anchors.size());
+    for (std::size_t c = 0; c < from.anchors.size(); ++c) to.anchors[c] = rank[from.anchors[c]];
+    // The point order's grouping with its members renumbered: each cluster's members stay in
+    // the order support.local and reconstruct() take them in, so every fit is the same.
+    LabelGroups groups = group_by_label(from.labels.data(), from.labels.size(), from.clusters);
+    for (Index& member : groups.members) member = rank[member];
+    workspace_.groups[l] = std::move(groups);
+  }
+}
+
+Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* base, const Vec3& origin,
+                                  const ProgressCallback* progress) {
+  const std::lock_guard<std::mutex> lock(busy_);
+  const Eigen::Index n = points();
+  const bool edited = base != nullptr;
+  if (edited) {
+    level_.resize(n, 3);
+    parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+      for (std::size_t r = b; r < e; ++r)
+        for (int a = 0; a < 3; ++a) level_(static_cast<Eigen::Index>(r), a) = base[3 * std::size_t(order_[r]) + a] - origin(a);
+    }, {}, 4096);
+  } else {
+    level_ = model_.base;
+  }
+  const Eigen::MatrixXd* g = &gains;
+  if (gains.cols() > 1) {
+    gains_.resize(gains.rows(), n);
+    for (Eigen::Index r = 0; r < n; ++r) gains_.col(r) = gains.col(order_[r]);
+    g = &gains_;
+  }
+  std::vector<Mat3> rotation;
+  if (edited) rotation = transported_rotations(model_.base, level_, model_.support[0]);
+  reconstruct_levels_in_place(model_, *g, level_, edited, edited ? &rotation : nullptr, nullptr, -1, progress,
+                              &workspace_);
+  Points out(n, 3);
+  const Eigen::RowVector3d shift = origin.transpose();
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+    for (std::size_t r = b; r < e; ++r) out.row(order_[r]) = level_.row(static_cast<Eigen::Index>(r)) + shift;
+  }, {}, 4096);
+  return out;
+}
+
+}  // namespace pointscale
