@@ -20,7 +20,9 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) {
     std::iota(order_.begin(), order_.end(), 0);
   }
   IndexList rank(order_.size());
-  for (std::size_t r = 0; r < order_.size(); ++r) rank[order_[r]] = static_cast<Index>(r);
+  parallel_for(order_.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t r = b; r < e; ++r) rank[order_[r]] = static_cast<Index>(r);
+  }, {}, 16384);
 
   model_.base.resize(n, 3);
   model_.base_normals.resize(n, 3);
@@ -46,13 +48,17 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) {
     to.frames = from.frames;
     to.local = from.local;  // rows in cluster order, which the renumbering below keeps
     to.labels.resize(from.labels.size());
-    for (std::size_t r = 0; r < order_.size(); ++r) to.labels[r] = from.labels[order_[r]];
     to.anchors.resize(from.anchors.size());
     for (std::size_t c = 0; c < from.anchors.size(); ++c) to.anchors[c] = rank[from.anchors[c]];
     // The point order's grouping with its members renumbered: each cluster's members stay in
     // the order support.local and reconstruct() take them in, so every fit is the same.
     LabelGroups groups = group_by_label(from.labels.data(), from.labels.size(), from.clusters);
-    for (Index& member : groups.members) member = rank[member];
+    parallel_for(order_.size(), [&](std::size_t b, std::size_t e) {
+      for (std::size_t r = b; r < e; ++r) {
+        to.labels[r] = from.labels[order_[r]];
+        groups.members[r] = rank[groups.members[r]];
+      }
+    }, {}, 16384);
     workspace_.groups[l] = std::move(groups);
   }
 }
