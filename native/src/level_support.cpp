@@ -52,7 +52,7 @@ inline void prefetch_line(const void* p) {
 // point_rows: rows that fill_queries reads by query index, to prefetch; null if it reads none.
 // reference_rotation: if given, query i is oriented by its reference row turned by its
 // cluster's rotation (#C).
-// groups: the queries grouped by query_labels (group_by_label, or any grouping with the same
+// cached_groups: the queries grouped by query_labels (group_by_label, or any grouping with the same
 // groups), if the caller has them already.
 // Writes into `normals`, whose storage is reused when it has n rows already (reconstruction
 // alternates two buffers: fresh pages cost it more than the copies it saves).

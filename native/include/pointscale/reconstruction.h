@@ -25,15 +25,17 @@ Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& 
 Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points base,
                                      bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr);
 
-// The level loop that both of the above and Reconstructor run, on p (P^0 in, the finest level
-// out). edited: p is not the stored base, so level 0's normals are fitted and oriented by the
-// stored ones turned by reference_rotation (#C); kept: receives every level and its normals
-// when not null. workspace: groupings and storage kept between calls, or null.
+// What a caller that reconstructs over and over (Reconstructor) keeps between calls.
 struct ReconstructionWorkspace {
   std::vector<LabelGroups> groups;  // per level: its points grouped like support.local, or empty
   Points normals[2];                // two levels' normals, alternating
   Points centroids;                 // a level's anchors
 };
+
+// The level loop that both of the above and Reconstructor run, on p (P^0 in, the finest level
+// out). edited: p is not the stored base, so level 0's normals are fitted and oriented by the
+// stored ones turned by reference_rotation (#C); kept: receives every level and its normals
+// when not null; workspace: null, or what the caller keeps between calls.
 void reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p, bool edited,
                                  const std::vector<Mat3>* reference_rotation, Reconstruction* kept, int upto,
                                  const ProgressCallback* progress, ReconstructionWorkspace* workspace);
