@@ -55,19 +55,27 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
     int candidates = 0;
     Vec3 centre = Vec3::Zero();
     double radius = 0.0;
+    bool gathered = false;  // the set holds the candidates of the last query
     auto query = [&](const Vec3& at) {
       candidates = support.knn(at.data(), kc, cand.data(), cand_d2.data());
       centre = at;
       radius = candidates < kc || kc == support.size() ? everything : std::sqrt(cand_d2[candidates - 1]);
+      gathered = false;
     };
-    // The candidates relative to p, in the order of the query (nearest to its centre first):
-    // fit_nearest_plane finds the k nearest of the foot at the front when the foot is near the
-    // centre, and sorts them out itself otherwise.
+    // The candidates relative to `origin`, in the order of the query (nearest to its centre
+    // first): fit_nearest_plane finds the k nearest of the foot at the front when the foot is
+    // near the centre, and sorts them out itself otherwise. Without thin sheets the origin is
+    // the query's centre, so the points a query serves share one gathering; with them it is
+    // each point, which the sheets' weights are measured from.
+    Vec3 origin = Vec3::Zero();
     auto gather = [&](const Vec3& p) {
+      if (!sheet_normals && gathered) return;
+      origin = sheet_normals ? p : centre;
+      gathered = true;
       set.resize(candidates);
       for (int j = 0; j < candidates; ++j) {
         const Index c = cand[j];
-        set.x[j] = s(c, 0) - p.x(); set.y[j] = s(c, 1) - p.y(); set.z[j] = s(c, 2) - p.z();
+        set.x[j] = s(c, 0) - origin.x(); set.y[j] = s(c, 1) - origin.y(); set.z[j] = s(c, 2) - origin.z();
         set.h[j] = h(c);
         set.inv_h2[j] = inv_h2(c);
         // Measured from the point being projected, not the moving foot, so that the foot
@@ -83,24 +91,30 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
       const Vec3 near_at = near ? Vec3(s.row((*near)[i]).transpose()) : p;
       if (candidates == 0) query(near_at);
       gather(p);
-      // The foot and the plane are kept relative to p, as the candidates are.
+      // The foot and the plane are kept relative to p; the candidates are relative to origin.
       Vec3 foot = Vec3::Zero();
       Vec3 normal = Vec3::Zero();
       bool converged = false, ok = false;
       double last_step = std::numeric_limits<double>::infinity(), damping = 1.0;
+      double nearest_h = 0.0, kth_d2 = 0.0;
+      auto fit_at_foot = [&] {
+        const Vec3 offset = p - origin;
+        PlaneFit fit = fit_nearest_plane(set, k, offset + foot, nearest_h, kth_d2);
+        fit.mean -= offset;
+        return fit;
+      };
       for (int it = 0; it < options.max_iterations; ++it) {
-        double nearest_h = 0.0, kth_d2 = 0.0;
-        PlaneFit fit = fit_nearest_plane(set, k, foot, nearest_h, kth_d2);
+        PlaneFit fit = fit_at_foot();
         auto holds = [&] { return radius == everything || (p + foot - centre).norm() + std::sqrt(kth_d2) < radius; };
         if (!holds() && near && it == 0 && centre != near_at) {
           query(near_at);
           gather(p);
-          fit = fit_nearest_plane(set, k, foot, nearest_h, kth_d2);
+          fit = fit_at_foot();
         }
         if (!holds()) {
           query(p + foot);
           gather(p);
-          fit = fit_nearest_plane(set, k, foot, nearest_h, kth_d2);
+          fit = fit_at_foot();
         }
         if (!fit.ok) break;
         ok = true;
