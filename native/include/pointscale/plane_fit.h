@@ -65,13 +65,13 @@ inline double max_abs6(const double* m) {
 // Squares the symmetric matrix a (six entries) until it is rank one to working precision
 // and returns its dominant column, normalised. Each squaring squares the ratio d of its two
 // largest eigenvalues, and tr^2 - |A|^2 is about 2 d tr^2. That difference is only known to a
-// few ulp of tr^2, so the test asks for d below about 5e-13, which rounding cannot fake, and
-// one more squaring takes d below 1e-24: at most one squaring more than needed, where a test
-// at the rounding level passed by chance (about half the time per squaring) and took up to
-// five more. The iterates are positive semi-definite after the first squaring, so their trace
+// few ulp of tr^2, so the test asks for d below about 5e-9, which rounding cannot fake, and
+// one more squaring takes d below 2.5e-17, under the rounding of the result: at most one
+// squaring more than needed, where a test at the rounding level passed by chance (about half
+// the time per squaring) and took up to five more. The iterates are positive semi-definite after the first squaring, so their trace
 // bounds every entry: rescaling by the power of two nearest below 1 / trace keeps them in
 // range, exactly and without a division on the critical path.
-constexpr double rank_one_test = 1e-12;
+constexpr double rank_one_test = 1e-8;
 
 inline Vec3 dominant_by_squaring(double* a) {
   bool last = false;  // the test passed: this squaring is the final one
