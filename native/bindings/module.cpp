@@ -30,13 +30,26 @@ Points to_points(const DoubleArray& a) {
   return p;
 }
 
+// An origin of 3 numbers, or zero for None.
+Vec3 to_origin(py::object origin) {
+  if (origin.is_none()) return Vec3::Zero();
+  const DoubleArray o = origin.cast<DoubleArray>();
+  if (o.size() != 3) throw std::invalid_argument("expected an origin of 3 numbers");
+  return Vec3(o.data()[0], o.data()[1], o.data()[2]);
+}
+
 // The points minus origin, in one copy (centring in NumPy first would hold a second one).
-Points to_points_centred(const DoubleArray& a, const DoubleArray& origin) {
+Points to_points_centred(const DoubleArray& a, const Vec3& origin) {
   Points p = to_points(a);
-  if (origin.size() != 3) throw std::invalid_argument("expected an origin of 3 numbers");
-  const Eigen::RowVector3d o(origin.data()[0], origin.data()[1], origin.data()[2]);
-  p.rowwise() -= o;
+  p.rowwise() -= origin.transpose();
   return p;
+}
+
+// Gains (k,) per band or (k, n) per point as a k by 1 or k by n matrix.
+Eigen::MatrixXd to_gains(const DoubleArray& gains) {
+  if (gains.ndim() < 1 || gains.ndim() > 2) throw std::invalid_argument("gains must be (k,) or (k, n)");
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      gains.data(), gains.shape(0), gains.ndim() == 2 ? gains.shape(1) : 1);
 }
 
 template <class T>
@@ -184,23 +197,18 @@ PYBIND11_MODULE(_core, m) {
       // and the points go out in them (one pass each way fewer than doing it in NumPy).
       .def("reconstruct", [](const MultiscaleModel& s, const DoubleArray& gains, py::object base, bool keep_levels,
                              int upto, py::object progress, py::object origin) {
-        const Eigen::MatrixXd g = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-            gains.data(), gains.shape(0), gains.ndim() == 2 ? gains.shape(1) : 1);
+        const Eigen::MatrixXd g = to_gains(gains);
         Points edited;
         const bool has_base = !base.is_none();
-        const bool has_origin = !origin.is_none();
-        DoubleArray o(std::vector<py::ssize_t>{3});
-        std::fill(o.mutable_data(), o.mutable_data() + 3, 0.0);
-        if (has_origin) o = origin.cast<DoubleArray>();
+        const Vec3 o = to_origin(origin);
         if (has_base) edited = to_points_centred(base.cast<DoubleArray>(), o);
         PythonProgress p(progress);
         Reconstruction r = without_gil([&] {
           Reconstruction out = has_base ? reconstruct_from_base(s, g, std::move(edited), keep_levels, upto, p.get())
                                         : reconstruct(s, g, nullptr, keep_levels, upto, p.get());
-          if (has_origin) {
-            const Eigen::RowVector3d shift(o.data()[0], o.data()[1], o.data()[2]);
-            out.positions.rowwise() += shift;
-            for (Points& level : out.levels) level.rowwise() += shift;
+          if (!origin.is_none()) {
+            out.positions.rowwise() += o.transpose();
+            for (Points& level : out.levels) level.rowwise() += o.transpose();
           }
           return out;
         });
@@ -218,22 +226,14 @@ PYBIND11_MODULE(_core, m) {
       .def("reconstruct", [](Reconstructor& r, const DoubleArray& gains, py::object base, py::object progress,
                              py::object origin) {
         const Eigen::Index n = r.points();
-        const py::ssize_t cols = gains.ndim() == 2 ? gains.shape(1) : 1;
-        if (gains.ndim() < 1 || gains.ndim() > 2 || gains.shape(0) != r.bands() || (cols != 1 && cols != n))
-          throw std::invalid_argument("gains must be (k,) or (k, n)");
-        const Eigen::MatrixXd g = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-            gains.data(), gains.shape(0), cols);
+        const Eigen::MatrixXd g = to_gains(gains);
+        if (g.rows() != r.bands() || (g.cols() != 1 && g.cols() != n)) throw std::invalid_argument("gains must be (k,) or (k, n)");
         DoubleArray b;
         if (!base.is_none()) {
           b = base.cast<DoubleArray>();
           if (b.ndim() != 2 || b.shape(0) != n || b.shape(1) != 3) throw std::invalid_argument("base must be (n, 3)");
         }
-        Vec3 o = Vec3::Zero();
-        if (!origin.is_none()) {
-          const DoubleArray oa = origin.cast<DoubleArray>();
-          if (oa.size() != 3) throw std::invalid_argument("expected an origin of 3 numbers");
-          o = Vec3(oa.data()[0], oa.data()[1], oa.data()[2]);
-        }
+        const Vec3 o = to_origin(origin);
         const double* base_rows = base.is_none() ? nullptr : b.data();
         PythonProgress p(progress);
         return without_gil([&] { return r.reconstruct(g, base_rows, o, p.get()); });
@@ -243,7 +243,7 @@ PYBIND11_MODULE(_core, m) {
   m.def("decompose", [](const DoubleArray& points, const DoubleArray& origin, py::object normals, int levels,
                         double decimation, double kernel, int neighbors, double tolerance, int max_iterations,
                         double max_variation, py::object diffusion, py::object progress) {
-    Points p = to_points_centred(points, origin);
+    Points p = to_points_centred(points, to_origin(origin));
     Points n;
     const bool has_normals = !normals.is_none();
     if (has_normals) n = to_points(normals.cast<DoubleArray>());

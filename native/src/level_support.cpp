@@ -14,9 +14,14 @@
 
 namespace pointscale {
 
-Points support_centroids(const Points& level, const LevelSupport& support) {
-  Points out(support.clusters, 3);
+void support_centroids(const Points& level, const LevelSupport& support, Points& out) {
+  out.resize(support.clusters, 3);
   for (Index c = 0; c < support.clusters; ++c) out.row(c) = level.row(support.anchors[c]);
+}
+
+Points support_centroids(const Points& level, const LevelSupport& support) {
+  Points out;
+  support_centroids(level, support, out);
   return out;
 }
 
@@ -274,21 +279,17 @@ void anchor_normals_into(const Points& centroids, const LevelSupport& support, c
 Points level_normals(const Points& level, const LevelSupport& support, const Points& reference,
                      const ProgressStage& stage) {
   Points normals;
-  anchor_normals_into(support_centroids(level, support), support, reference, stage, normals);
+  level_normals(level, support, reference, stage, normals);
   return normals;
 }
 
 void level_normals(const Points& level, const LevelSupport& support, const Points& reference,
                    const ProgressStage& stage, Points& normals, const std::vector<Mat3>* reference_rotation,
                    const LabelGroups* groups, Points* centroids) {
-  if (!centroids) {
-    anchor_normals_into(support_centroids(level, support), support, reference, stage, normals, reference_rotation,
-                        groups);
-    return;
-  }
-  centroids->resize(support.clusters, 3);
-  for (Index c = 0; c < support.clusters; ++c) centroids->row(c) = level.row(support.anchors[c]);
-  anchor_normals_into(*centroids, support, reference, stage, normals, reference_rotation, groups);
+  Points own;
+  Points& anchors = centroids ? *centroids : own;
+  support_centroids(level, support, anchors);
+  anchor_normals_into(anchors, support, reference, stage, normals, reference_rotation, groups);
 }
 
 Points anchor_normals(const Points& centroids, const LevelSupport& support, const Points& reference,

@@ -21,7 +21,8 @@ void PlaneStencil::assign(const Points& points, const Index* nb, int k, const Ei
   double* __restrict py = y.data();
   double* __restrict pz = z.data();
   double* __restrict ih2 = inv_h2.data();
-  for (int j = 0; j < k; ++j) {  // the gather; the rest vectorises
+  // The gather, scalar; the loop after it vectorises. inv_h2 holds h until then.
+  for (int j = 0; j < k; ++j) {
     px[j] = points(nb[j], 0) - origin.x();
     py[j] = points(nb[j], 1) - origin.y();
     pz[j] = points(nb[j], 2) - origin.z();

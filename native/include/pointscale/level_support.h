@@ -65,8 +65,10 @@ Points anchor_normals(const Points& centroids, const LevelSupport& support, cons
 Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
                                   const std::vector<unsigned char>& clusters, IndexList& which);
 
-// The anchors' positions in the level. level  #P by 3; returns #C by 3.
+// The anchors' positions in the level. level  #P by 3; returns #C by 3 (or writes them into
+// out, reusing its storage).
 Points support_centroids(const Points& level, const LevelSupport& support);
+void support_centroids(const Points& level, const LevelSupport& support, Points& out);
 
 // Picks each cluster's anchor: the member with the smallest |fine - level|, whose own normal then
 // barely depends on itself, so the offsets-along-normals condition converges quickly.
