@@ -12,6 +12,7 @@
 #include "pointscale/sample_spacing.h"
 #include "pointscale/spatial_index.h"
 #include "pointscale/spatial_order.h"
+#include "pointscale/support_neighbours.h"
 
 namespace pointscale {
 
@@ -201,7 +202,10 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     if (options.diffusion) clusters.centroids = diffuse(clusters.centroids, *options.diffusion);
     stage.report(0.05);
     SpatialIndex q_index(clusters.centroids);
-    const Eigen::VectorXd h = options.kernel * local_spacing(q_index, 6);
+    // Each centroid's nearest centroids, asked once: its kernel width and its cluster's MLS query.
+    Eigen::VectorXd spacing;
+    SupportNeighbours rows = support_neighbours(q_index, kk + near_query_extra, 6, &spacing);
+    const Eigen::VectorXd h = options.kernel * spacing;
 
     // Project P^l onto the MLS surface of Q^{l-1}, cluster by cluster, each cluster's points
     // around one query at its centroid (clusters come in a spatial order). The same grouping
@@ -213,8 +217,10 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
       MlsOptions mls = options.mls;
       mls.order = &groups.members;
       mls.near_support = &clusters.labels;
+      mls.near_rows = &rows;
       projected = mls_project(fine, q_index, h, mls, stage.sub(0.1, 0.8));
     }
+    rows = SupportNeighbours();
 
     // The level's own support: clusters, their neighbourhoods and kernels.
     LevelSupport& support = model.support[l - 1];

@@ -43,7 +43,10 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   const IndexList* near = options.near_support && options.near_support->size() == static_cast<std::size_t>(n)
                               ? options.near_support : nullptr;
   // Centred on a support point, a query must reach past the k nearest of every point around it.
-  const int kc = std::min<int>(near ? k + 16 : k + 8, support.size());
+  const int kc = std::min<int>(near ? k + near_query_extra : k + 8, support.size());
+  const SupportNeighbours* rows = near && options.near_rows && options.near_rows->width == kc &&
+                                          options.near_rows->reach.size() == support.size()
+                                      ? options.near_rows : nullptr;
   const bool given = options.order && options.order->size() == static_cast<std::size_t>(n);
   const IndexList own_order = given ? IndexList() : morton_order(x);
   const IndexList& order = given ? *options.order : own_order;
@@ -60,6 +63,15 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
       candidates = support.knn(at.data(), kc, cand.data(), cand_d2.data());
       centre = at;
       radius = candidates < kc || kc == support.size() ? everything : std::sqrt(cand_d2[candidates - 1]);
+      gathered = false;
+    };
+    // The query centred on support point c, from its row when the caller made them.
+    auto query_at_support = [&](Index c) {
+      if (!rows) return query(s.row(c).transpose());
+      candidates = kc;
+      std::copy_n(rows->nearest.data() + static_cast<std::size_t>(c) * kc, kc, cand.data());
+      centre = s.row(c).transpose();
+      radius = rows->reach(c);
       gathered = false;
     };
     // The candidates relative to `origin`, in the order of the query (nearest to its centre
@@ -89,7 +101,7 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
       const auto i = static_cast<std::size_t>(order[t]);
       const Vec3 p = x.row(static_cast<Eigen::Index>(i)).transpose();
       const Vec3 near_at = near ? Vec3(s.row((*near)[i]).transpose()) : p;
-      if (candidates == 0) query(near_at);
+      if (candidates == 0) near ? query_at_support((*near)[i]) : query(p);
       gather(p);
       // The foot and the plane are kept relative to p; the candidates are relative to origin.
       Vec3 foot = Vec3::Zero();
@@ -107,7 +119,7 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
         PlaneFit fit = fit_at_foot();
         auto holds = [&] { return radius == everything || (p + foot - centre).norm() + std::sqrt(kth_d2) < radius; };
         if (!holds() && near && it == 0 && centre != near_at) {
-          query(near_at);
+          query_at_support((*near)[i]);
           gather(p);
           fit = fit_at_foot();
         }

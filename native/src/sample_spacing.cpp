@@ -7,6 +7,23 @@
 
 namespace pointscale {
 
+double spacing_from_neighbours(const double* squared_distances, int found, int k) {
+  double sum = 0.0;
+  int used = 0;
+  for (int j = 0; j < found && used < k; ++j)
+    if (squared_distances[j] > 0.0) { sum += std::sqrt(squared_distances[j]); ++used; }
+  return used ? sum / used : 0.0;
+}
+
+void fill_missing_spacing(Eigen::VectorXd& spacing) {
+  std::vector<double> positive;
+  for (Eigen::Index i = 0; i < spacing.size(); ++i) if (spacing(i) > 0.0) positive.push_back(spacing(i));
+  if (positive.empty()) return;
+  std::nth_element(positive.begin(), positive.begin() + positive.size() / 2, positive.end());
+  const double median = positive[positive.size() / 2];
+  for (Eigen::Index i = 0; i < spacing.size(); ++i) if (!(spacing(i) > 0.0)) spacing(i) = median;
+}
+
 Eigen::VectorXd local_spacing(const SpatialIndex& index, int k) {
   const Index n = index.size();
   Eigen::VectorXd spacing(n);
@@ -15,21 +32,11 @@ Eigen::VectorXd local_spacing(const SpatialIndex& index, int k) {
     std::vector<Index> idx(query);
     std::vector<double> d2(query);
     for (std::size_t i = b; i < e; ++i) {
-      int found = index.knn(index.points().row(static_cast<Eigen::Index>(i)).data(), query, idx.data(), d2.data());
-      double sum = 0.0;
-      int used = 0;
-      for (int j = 0; j < found && used < k; ++j)
-        if (d2[j] > 0.0) { sum += std::sqrt(d2[j]); ++used; }
-      spacing(static_cast<Eigen::Index>(i)) = used ? sum / used : 0.0;
+      const int found = index.knn(index.points().row(static_cast<Eigen::Index>(i)).data(), query, idx.data(), d2.data());
+      spacing(static_cast<Eigen::Index>(i)) = spacing_from_neighbours(d2.data(), found, k);
     }
   });
-  std::vector<double> positive;
-  for (Index i = 0; i < n; ++i) if (spacing(i) > 0.0) positive.push_back(spacing(i));
-  if (!positive.empty()) {
-    std::nth_element(positive.begin(), positive.begin() + positive.size() / 2, positive.end());
-    const double median = positive[positive.size() / 2];
-    for (Index i = 0; i < n; ++i) if (!(spacing(i) > 0.0)) spacing(i) = median;
-  }
+  fill_missing_spacing(spacing);
   return spacing;
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 #include "pointscale/progress.h"
 #include "pointscale/spatial_index.h"
+#include "pointscale/support_neighbours.h"
 #include "pointscale/types.h"
 
 namespace pointscale {
@@ -27,7 +28,14 @@ struct MlsOptions {
   // points ordered by it: a point's first query is then centred there, asking for more
   // candidates, so that one query serves all the points around that support point.
   const IndexList* near_support = nullptr;
+  // With near_support, the support's rows from support_neighbours(support, neighbors +
+  // near_query_extra), made by the caller for other uses too: they stand in for the queries
+  // centred on support points (the same candidates in the same order).
+  const SupportNeighbours* near_rows = nullptr;
 };
+
+// Candidates beyond the k a fit takes that a query centred on a support point asks for.
+constexpr int near_query_extra = 16;
 
 struct MlsResult {
   Points positions;           // #X by 3 projected points

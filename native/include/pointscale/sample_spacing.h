@@ -9,4 +9,10 @@ namespace pointscale {
 // Returns #P spacings.
 Eigen::VectorXd local_spacing(const SpatialIndex& index, int k = 6);
 
+// Its two steps, for callers that query the neighbours anyway (support_neighbours.h): one
+// point's spacing from its neighbours' squared distances, closest first (0 if all are 0)...
+double spacing_from_neighbours(const double* squared_distances, int found, int k);
+// ...and the median of the others for the points left at 0.
+void fill_missing_spacing(Eigen::VectorXd& spacing);
+
 }  // namespace pointscale
