@@ -14,7 +14,7 @@ void PlaneStencil::assign(const Points& points, const Index* nb, int k, const Ei
                           const Vec3& origin) {
   if (size != k) {
     for (auto* v : {&x, &y, &z, &xx, &yy, &zz, &xy, &xz, &yz, &inv_h2, &e0, &gx, &gy, &gz}) v->resize(k);
-    scratch.resize(4 * static_cast<std::size_t>(k));
+    scratch.resize(8 * static_cast<std::size_t>(k));
     size = k;
   }
   double* __restrict px = x.data();
@@ -62,6 +62,65 @@ inline void covariance_from_sums(double sw, double sx, double sy, double sz, dou
   valid = weighed && trace > 0.0 ? 1.0 : 0.0;
 }
 
+// Queries first .. first + L - 1 of stencil_covariances: lanes are queries, not neighbours.
+// Every member of the cluster meets the same neighbours, so neighbour j is one broadcast value
+// and no horizontal sums are left. Eight lanes fill AVX-512 registers, four AVX2 ones; each
+// lane's arithmetic is the same either way.
+template <int L>
+__attribute__((always_inline)) inline void covariances_of_group(PlaneStencil& stencil, const double* queries, int first, double weight_floor,
+                                 double* cov, double* trace, double* valid) {
+  const int k = stencil.size;
+  const double* __restrict px = stencil.x.data();
+  const double* __restrict py = stencil.y.data();
+  const double* __restrict pz = stencil.z.data();
+  const double* __restrict pxx = stencil.xx.data();
+  const double* __restrict pyy = stencil.yy.data();
+  const double* __restrict pzz = stencil.zz.data();
+  const double* __restrict pxy = stencil.xy.data();
+  const double* __restrict pxz = stencil.xz.data();
+  const double* __restrict pyz = stencil.yz.data();
+  const double* __restrict ih2 = stencil.inv_h2.data();
+  const double* __restrict e0 = stencil.e0.data();
+  const double* __restrict gx = stencil.gx.data();
+  const double* __restrict gy = stencil.gy.data();
+  const double* __restrict gz = stencil.gz.data();
+  double* __restrict e = stencil.scratch.data();  // #K by L
+  alignas(64) double qx[L], qy[L], qz[L], q2[L], min_e[L];
+  for (int l = 0; l < L; ++l) {
+    qx[l] = queries[3 * (first + l)];
+    qy[l] = queries[3 * (first + l) + 1];
+    qz[l] = queries[3 * (first + l) + 2];
+    q2[l] = qx[l] * qx[l] + qy[l] * qy[l] + qz[l] * qz[l];
+    min_e[l] = std::numeric_limits<double>::infinity();
+  }
+  for (int j = 0; j < k; ++j) {
+#pragma omp simd
+    for (int l = 0; l < L; ++l) {
+      const double v = e0[j] + ih2[j] * q2[l] + gx[j] * qx[l] + gy[j] * qy[l] + gz[j] * qz[l];
+      e[j * L + l] = v;
+      min_e[l] = v < min_e[l] ? v : min_e[l];
+    }
+  }
+  // Sums about the origin: the neighbours' products are the stencil's, shared by all queries.
+  alignas(64) double sw[L] = {}, sx[L] = {}, sy[L] = {}, sz[L] = {}, sxx[L] = {}, syy[L] = {}, szz[L] = {},
+                     sxy[L] = {}, sxz[L] = {}, syz[L] = {};
+  for (int j = 0; j < k; ++j) {
+#pragma omp simd
+    for (int l = 0; l < L; ++l) {
+      double w = exp_nonpositive(min_e[l] - e[j * L + l]);
+      w = w > weight_floor ? w : weight_floor;
+      sw[l] += w; sx[l] += w * px[j]; sy[l] += w * py[j]; sz[l] += w * pz[j];
+      sxx[l] += w * pxx[j]; syy[l] += w * pyy[j]; szz[l] += w * pzz[j];
+      sxy[l] += w * pxy[j]; sxz[l] += w * pxz[j]; syz[l] += w * pyz[j];
+    }
+  }
+  for (int l = 0; l < L; ++l) {
+    const int i = first + l;
+    covariance_from_sums(sw[l], sx[l], sy[l], sz[l], sxx[l], syy[l], szz[l], sxy[l], sxz[l], syz[l], cov + 6 * i,
+                         trace[i], valid[i]);
+  }
+}
+
 }  // namespace
 
 POINTSCALE_CLONES
@@ -82,49 +141,11 @@ void stencil_covariances(PlaneStencil& stencil, const double* queries, int m, do
   const double* __restrict gx = stencil.gx.data();
   const double* __restrict gy = stencil.gy.data();
   const double* __restrict gz = stencil.gz.data();
-  double* __restrict e = stencil.scratch.data();  // #K by query_lanes
-  // Whole groups of four queries: lanes are queries, not neighbours. Every member of the
-  // cluster meets the same neighbours, so neighbour j is one broadcast value and no horizontal
-  // sums are left; four at a time keep the ten sums in ten AVX2 registers.
-  constexpr int query_lanes = 4;
-  const int grouped = m - m % query_lanes;
-  for (int first = 0; first < grouped; first += query_lanes) {
-    alignas(32) double qx[query_lanes], qy[query_lanes], qz[query_lanes], q2[query_lanes], min_e[query_lanes];
-    for (int l = 0; l < query_lanes; ++l) {
-      qx[l] = queries[3 * (first + l)];
-      qy[l] = queries[3 * (first + l) + 1];
-      qz[l] = queries[3 * (first + l) + 2];
-      q2[l] = qx[l] * qx[l] + qy[l] * qy[l] + qz[l] * qz[l];
-      min_e[l] = std::numeric_limits<double>::infinity();
-    }
-    for (int j = 0; j < k; ++j) {
-#pragma omp simd
-      for (int l = 0; l < query_lanes; ++l) {
-        const double v = e0[j] + ih2[j] * q2[l] + gx[j] * qx[l] + gy[j] * qy[l] + gz[j] * qz[l];
-        e[j * query_lanes + l] = v;
-        min_e[l] = v < min_e[l] ? v : min_e[l];
-      }
-    }
-    // Sums about the origin: the neighbours' products are the stencil's, shared by all queries.
-    alignas(32) double sw[query_lanes] = {}, sx[query_lanes] = {}, sy[query_lanes] = {}, sz[query_lanes] = {},
-                       sxx[query_lanes] = {}, syy[query_lanes] = {}, szz[query_lanes] = {}, sxy[query_lanes] = {},
-                       sxz[query_lanes] = {}, syz[query_lanes] = {};
-    for (int j = 0; j < k; ++j) {
-#pragma omp simd
-      for (int l = 0; l < query_lanes; ++l) {
-        double w = exp_nonpositive(min_e[l] - e[j * query_lanes + l]);
-        w = w > weight_floor ? w : weight_floor;
-        sw[l] += w; sx[l] += w * px[j]; sy[l] += w * py[j]; sz[l] += w * pz[j];
-        sxx[l] += w * pxx[j]; syy[l] += w * pyy[j]; szz[l] += w * pzz[j];
-        sxy[l] += w * pxy[j]; sxz[l] += w * pxz[j]; syz[l] += w * pyz[j];
-      }
-    }
-    for (int l = 0; l < query_lanes; ++l) {
-      const int i = first + l;
-      covariance_from_sums(sw[l], sx[l], sy[l], sz[l], sxx[l], syy[l], szz[l], sxy[l], sxz[l], syz[l], cov + 6 * i,
-                           trace[i], valid[i]);
-    }
-  }
+  double* __restrict e = stencil.scratch.data();
+  int first = 0;
+  for (; first + 8 <= m; first += 8) covariances_of_group<8>(stencil, queries, first, weight_floor, cov, trace, valid);
+  for (; first + 4 <= m; first += 4) covariances_of_group<4>(stencil, queries, first, weight_floor, cov, trace, valid);
+  const int grouped = first;
   // The rest one at a time, lanes over neighbours (clusters with a single query, as in the
   // consistency iteration, all go this way).
   for (int i = grouped; i < m; ++i) {

@@ -16,7 +16,7 @@ struct PlaneStencil {
   std::vector<double> inv_h2;             // #K 1 / h^2 of each neighbour's kernel
   std::vector<double> e0, gx, gy, gz;     // #K |p|^2 / h^2 and -2 p / h^2: the exponent at q is
                                           // e0 + |q|^2 / h^2 + g . q
-  std::vector<double> scratch;            // #K by 4 per-query workspace
+  std::vector<double> scratch;            // #K by 8 per-query workspace
   int size = 0;
 
   // Gathers rows nb[0..k) of points, relative to origin, with kernel widths h(nb[j]).
