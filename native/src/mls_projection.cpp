@@ -39,7 +39,8 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   // always those of a fresh query. With a support point near each point (decompose passes each
   // point's cluster), the query is centred there instead, and serves the points around it:
   // at 1M points, 446k queries in the three projections of a decomposition, 1.13M in Morton
-  // order.
+  // order. Decompose also hands over the support's rows (support_neighbours.h), which answer
+  // the queries centred on support points without the tree.
   const IndexList* near = options.near_support && options.near_support->size() == static_cast<std::size_t>(n)
                               ? options.near_support : nullptr;
   // Centred on a support point, a query must reach past the k nearest of every point around it.

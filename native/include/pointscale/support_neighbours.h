@@ -16,7 +16,8 @@ struct SupportNeighbours {
 // index    the #S support points
 // width    entries per row
 // spacing  if not null, receives #S local_spacing(index, spacing_k): the same values, from
-//          the same queries (the first spacing_k + 8 entries of a row are what it asks for)
+//          the same queries, when width >= spacing_k + 8 (the first spacing_k + 8 entries of
+//          a row are what it asks for)
 SupportNeighbours support_neighbours(const SpatialIndex& index, int width, int spacing_k = 6,
                                      Eigen::VectorXd* spacing = nullptr);
 
