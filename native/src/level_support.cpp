@@ -292,13 +292,6 @@ void level_normals(const Points& level, const LevelSupport& support, const Point
   anchor_normals_into(anchors, support, reference, stage, normals, reference_rotation, groups);
 }
 
-Points anchor_normals(const Points& centroids, const LevelSupport& support, const Points& reference,
-                      const ProgressStage& stage) {
-  Points normals;
-  anchor_normals_into(centroids, support, reference, stage, normals);
-  return normals;
-}
-
 Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
                                   const std::vector<unsigned char>& clusters, IndexList& which) {
   // Taken cluster by cluster in the order support.local is stored in: rows[j] is which[j]'s row.

@@ -80,7 +80,9 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
   const Eigen::MatrixXd* g = &gains;
   if (gains.cols() > 1) {
     gains_.resize(gains.rows(), n);
-    for (Eigen::Index r = 0; r < n; ++r) gains_.col(r) = gains.col(order_[r]);
+    parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+      for (std::size_t r = b; r < e; ++r) gains_.col(static_cast<Eigen::Index>(r)) = gains.col(order_[r]);
+    }, {}, 4096);
     g = &gains_;
   }
   std::vector<Mat3> rotation;

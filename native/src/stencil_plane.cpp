@@ -62,13 +62,15 @@ inline void covariance_from_sums(double sw, double sx, double sy, double sz, dou
   valid = weighed && trace > 0.0 ? 1.0 : 0.0;
 }
 
-// Queries first .. first + L - 1 of stencil_covariances: lanes are queries, not neighbours.
-// Every member of the cluster meets the same neighbours, so neighbour j is one broadcast value
-// and no horizontal sums are left. Eight lanes fill AVX-512 registers, four AVX2 ones; each
-// lane's arithmetic is the same either way.
+// Queries first .. first + L - 1 of stencil_covariances. With L > 1 lanes are queries, not
+// neighbours: every member of the cluster meets the same neighbours, so neighbour j is one
+// broadcast value and no horizontal sums are left. Eight lanes fill AVX-512 registers, four
+// AVX2 ones; each lane's arithmetic is the same either way. With L = 1 (the rest of a cluster,
+// and clusters with a single query, as in the consistency iteration) lanes are neighbours.
 template <int L>
-__attribute__((always_inline)) inline void covariances_of_group(PlaneStencil& stencil, const double* queries, int first, double weight_floor,
-                                 double* cov, double* trace, double* valid) {
+__attribute__((always_inline)) inline void covariances_of_group(PlaneStencil& stencil, const double* queries, int first,
+                                                                double weight_floor, double* cov, double* trace,
+                                                                double* valid) {
   const int k = stencil.size;
   const double* __restrict px = stencil.x.data();
   const double* __restrict py = stencil.y.data();
@@ -85,6 +87,27 @@ __attribute__((always_inline)) inline void covariances_of_group(PlaneStencil& st
   const double* __restrict gy = stencil.gy.data();
   const double* __restrict gz = stencil.gz.data();
   double* __restrict e = stencil.scratch.data();  // #K by L
+  if constexpr (L == 1) {
+    const double qx = queries[3 * first], qy = queries[3 * first + 1], qz = queries[3 * first + 2];
+    const double q2 = qx * qx + qy * qy + qz * qz;
+    double min_e = std::numeric_limits<double>::infinity();
+#pragma omp simd reduction(min : min_e)
+    for (int j = 0; j < k; ++j) {
+      e[j] = e0[j] + ih2[j] * q2 + gx[j] * qx + gy[j] * qy + gz[j] * qz;
+      min_e = e[j] < min_e ? e[j] : min_e;
+    }
+    double sw = 0, sx = 0, sy = 0, sz = 0, sxx = 0, syy = 0, szz = 0, sxy = 0, sxz = 0, syz = 0;
+#pragma omp simd reduction(+ : sw, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz)
+    for (int j = 0; j < k; ++j) {
+      double w = exp_nonpositive(min_e - e[j]);
+      w = w > weight_floor ? w : weight_floor;
+      sw += w; sx += w * px[j]; sy += w * py[j]; sz += w * pz[j];
+      sxx += w * pxx[j]; syy += w * pyy[j]; szz += w * pzz[j];
+      sxy += w * pxy[j]; sxz += w * pxz[j]; syz += w * pyz[j];
+    }
+    covariance_from_sums(sw, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz, cov + 6 * first, trace[first], valid[first]);
+    return;
+  }
   alignas(64) double qx[L], qy[L], qz[L], q2[L], min_e[L];
   for (int l = 0; l < L; ++l) {
     qx[l] = queries[3 * (first + l)];
@@ -126,48 +149,10 @@ __attribute__((always_inline)) inline void covariances_of_group(PlaneStencil& st
 POINTSCALE_CLONES
 void stencil_covariances(PlaneStencil& stencil, const double* queries, int m, double weight_floor, double* cov,
                          double* trace, double* valid) {
-  const int k = stencil.size;
-  const double* __restrict px = stencil.x.data();
-  const double* __restrict py = stencil.y.data();
-  const double* __restrict pz = stencil.z.data();
-  const double* __restrict pxx = stencil.xx.data();
-  const double* __restrict pyy = stencil.yy.data();
-  const double* __restrict pzz = stencil.zz.data();
-  const double* __restrict pxy = stencil.xy.data();
-  const double* __restrict pxz = stencil.xz.data();
-  const double* __restrict pyz = stencil.yz.data();
-  const double* __restrict ih2 = stencil.inv_h2.data();
-  const double* __restrict e0 = stencil.e0.data();
-  const double* __restrict gx = stencil.gx.data();
-  const double* __restrict gy = stencil.gy.data();
-  const double* __restrict gz = stencil.gz.data();
-  double* __restrict e = stencil.scratch.data();
   int first = 0;
   for (; first + 8 <= m; first += 8) covariances_of_group<8>(stencil, queries, first, weight_floor, cov, trace, valid);
   for (; first + 4 <= m; first += 4) covariances_of_group<4>(stencil, queries, first, weight_floor, cov, trace, valid);
-  const int grouped = first;
-  // The rest one at a time, lanes over neighbours (clusters with a single query, as in the
-  // consistency iteration, all go this way).
-  for (int i = grouped; i < m; ++i) {
-    const double qx = queries[3 * i], qy = queries[3 * i + 1], qz = queries[3 * i + 2];
-    const double q2 = qx * qx + qy * qy + qz * qz;
-    double min_e = std::numeric_limits<double>::infinity();
-#pragma omp simd reduction(min : min_e)
-    for (int j = 0; j < k; ++j) {
-      e[j] = e0[j] + ih2[j] * q2 + gx[j] * qx + gy[j] * qy + gz[j] * qz;
-      min_e = e[j] < min_e ? e[j] : min_e;
-    }
-    double sw = 0, sx = 0, sy = 0, sz = 0, sxx = 0, syy = 0, szz = 0, sxy = 0, sxz = 0, syz = 0;
-#pragma omp simd reduction(+ : sw, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz)
-    for (int j = 0; j < k; ++j) {
-      double w = exp_nonpositive(min_e - e[j]);
-      w = w > weight_floor ? w : weight_floor;
-      sw += w; sx += w * px[j]; sy += w * py[j]; sz += w * pz[j];
-      sxx += w * pxx[j]; syy += w * pyy[j]; szz += w * pzz[j];
-      sxy += w * pxy[j]; sxz += w * pxz[j]; syz += w * pyz[j];
-    }
-    covariance_from_sums(sw, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz, cov + 6 * i, trace[i], valid[i]);
-  }
+  for (; first < m; ++first) covariances_of_group<1>(stencil, queries, first, weight_floor, cov, trace, valid);
 }
 
 }  // namespace pointscale

@@ -53,14 +53,11 @@ void level_normals(const Points& level, const LevelSupport& support, const Point
                    const std::vector<Mat3>* reference_rotation = nullptr, const LabelGroups* groups = nullptr,
                    Points* centroids = nullptr);
 
-// The same from the anchors' positions alone (#C by 3, support_centroids of the level): the
-// normals need nothing else, so a finished level can be dropped and its anchors kept.
-Points anchor_normals(const Points& centroids, const LevelSupport& support, const Points& reference,
-                      const ProgressStage& stage = {});
-
-// anchor_normals at the members of some clusters only: #W by 3, the rows of the points of
+// level_normals at the members of some clusters only, from the anchors' positions alone
+// (centroids #C by 3, support_centroids of the level: the normals need nothing else, so a
+// finished level can be dropped and its anchors kept): #W by 3, the rows of the points of
 // those clusters, cluster by cluster (which[j]: the point of row j). Each cluster's members
-// are fitted together as in anchor_normals, so the rows are bitwise the same as there.
+// are fitted together as in level_normals, so the rows are bitwise the same as there.
 // clusters: flags, #C (nonzero: evaluate that cluster's members).
 Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
                                   const std::vector<unsigned char>& clusters, IndexList& which);
