@@ -96,3 +96,19 @@ def test_a_reconstructor_called_from_several_threads_gives_each_its_own_result()
         results = list(pool.map(lambda g: solver.reconstruct(gains=g), gains))
     for got, want in zip(results, expected):
         assert np.array_equal(got, want)
+
+
+def test_reconstruct_from_several_threads_on_one_decomposition_gives_each_its_own_result():
+    # reconstruct() keeps its working arrays beside the decomposition; a call that finds them in
+    # use by another thread works without them.
+    from concurrent.futures import ThreadPoolExecutor
+    points = ps.shapes.bumpy_sphere(20000)
+    dec = ps.decompose(points, levels=4)
+    base = dec.base * 1.1
+    gains = [np.array([1.0, g, 2.0 - g]) for g in np.linspace(0.0, 2.0, 8)]
+    # Without the kept arrays, straight from the model:
+    expected = [dec._model.reconstruct(g, base, False, -1, None, dec.origin) for g in gains]
+    with ThreadPoolExecutor(4) as pool:
+        results = list(pool.map(lambda g: ps.reconstruct(dec, gains=g, base=base), gains * 3))
+    for i, got in enumerate(results):
+        assert np.array_equal(got, expected[i % len(gains)])

@@ -5,6 +5,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <mutex>
+
 #include "pointscale/cluster_decimation.h"
 #include "pointscale/decomposition.h"
 #include "pointscale/mls_projection.h"
@@ -170,6 +172,13 @@ MultiscaleModel model_from_arrays(const py::dict& d) {
   return m;
 }
 
+// A decomposition's reconstruction storage, kept between reconstruct() calls (the pointscale
+// package keeps one beside each model). A call that finds it in use works without it.
+struct ReconstructionBuffers {
+  std::mutex busy;
+  ReconstructionWorkspace workspace;
+};
+
 }  // namespace
 
 void bind_operators(py::module_& m);  // operators.cpp
@@ -196,16 +205,20 @@ PYBIND11_MODULE(_core, m) {
       // origin: the decomposition's origin, or None. Given, `base` comes in world coordinates
       // and the points go out in them (one pass each way fewer than doing it in NumPy).
       .def("reconstruct", [](const MultiscaleModel& s, const DoubleArray& gains, py::object base, bool keep_levels,
-                             int upto, py::object progress, py::object origin) {
+                             int upto, py::object progress, py::object origin, py::object buffers) {
         const Eigen::MatrixXd g = to_gains(gains);
         Points edited;
         const bool has_base = !base.is_none();
         const Vec3 o = to_origin(origin);
         if (has_base) edited = to_points_centred(base.cast<DoubleArray>(), o);
         PythonProgress p(progress);
+        ReconstructionBuffers* kept = buffers.is_none() ? nullptr : buffers.cast<ReconstructionBuffers*>();
         Reconstruction r = without_gil([&] {
-          Reconstruction out = has_base ? reconstruct_from_base(s, g, std::move(edited), keep_levels, upto, p.get())
-                                        : reconstruct(s, g, nullptr, keep_levels, upto, p.get());
+          std::unique_lock<std::mutex> lock;
+          if (kept) lock = std::unique_lock<std::mutex>(kept->busy, std::try_to_lock);
+          ReconstructionWorkspace* ws = lock.owns_lock() ? &kept->workspace : nullptr;
+          Reconstruction out = has_base ? reconstruct_from_base(s, g, std::move(edited), keep_levels, upto, p.get(), ws)
+                                        : reconstruct(s, g, nullptr, keep_levels, upto, p.get(), ws);
           if (!origin.is_none()) {
             out.positions.rowwise() += o.transpose();
             for (Points& level : out.levels) level.rowwise() += o.transpose();
@@ -215,7 +228,11 @@ PYBIND11_MODULE(_core, m) {
         if (!keep_levels) return py::object(py::cast(std::move(r.positions)));
         return py::object(py::make_tuple(py::cast(r.levels), py::cast(r.normals)));
       }, py::arg("gains"), py::arg("base") = py::none(), py::arg("keep_levels") = false, py::arg("upto") = -1,
-         py::arg("progress") = py::none(), py::arg("origin") = py::none());
+         py::arg("progress") = py::none(), py::arg("origin") = py::none(), py::arg("buffers") = py::none());
+
+  py::class_<ReconstructionBuffers>(m, "ReconstructionBuffers",
+                                    "Storage that Model.reconstruct reuses from call to call (two (n, 3) arrays).")
+      .def(py::init<>());
 
   // The solver for repeated reconstructions (reconstructor.h); the pointscale package checks
   // the arguments, these checks only keep a wrong call from reading out of bounds.

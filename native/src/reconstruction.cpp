@@ -49,10 +49,10 @@ namespace {
 
 Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points p, bool edited,
                                   const std::vector<Mat3>* reference_rotation, bool keep_levels, int upto,
-                                  const ProgressCallback* progress) {
+                                  const ProgressCallback* progress, ReconstructionWorkspace* workspace) {
   Reconstruction out;
   reconstruct_levels_in_place(model, gains, p, edited, reference_rotation, keep_levels ? &out : nullptr, upto,
-                              progress, nullptr);
+                              progress, workspace);
   out.positions = std::move(p);
   return out;
 }
@@ -60,15 +60,17 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
 }  // namespace
 
 Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
-                           bool keep_levels, int upto, const ProgressCallback* progress) {
-  if (base) return reconstruct_from_base(model, gains, *base, keep_levels, upto, progress);
-  return reconstruct_levels(model, gains, model.base, false, nullptr, keep_levels, upto, progress);
+                           bool keep_levels, int upto, const ProgressCallback* progress,
+                           ReconstructionWorkspace* workspace) {
+  if (base) return reconstruct_from_base(model, gains, *base, keep_levels, upto, progress, workspace);
+  return reconstruct_levels(model, gains, model.base, false, nullptr, keep_levels, upto, progress, workspace);
 }
 
 Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points base,
-                                     bool keep_levels, int upto, const ProgressCallback* progress) {
+                                     bool keep_levels, int upto, const ProgressCallback* progress,
+                                     ReconstructionWorkspace* workspace) {
   const std::vector<Mat3> rotation = transported_rotations(model.base, base, model.support[0]);
-  return reconstruct_levels(model, gains, std::move(base), true, &rotation, keep_levels, upto, progress);
+  return reconstruct_levels(model, gains, std::move(base), true, &rotation, keep_levels, upto, progress, workspace);
 }
 
 }  // namespace pointscale
