@@ -154,14 +154,26 @@ class BestFirst {
 
 }  // namespace
 
-Clustering cluster_decimate(const Points& points, std::size_t target, double max_variation) {
+Clustering cluster_decimate(const Points& points, std::size_t target, double max_variation,
+                            const IndexList* read_order) {
   const std::size_t n = static_cast<std::size_t>(points.rows());
   target = std::max<std::size_t>(1, std::min(target, n));
   if (n == 0) return Clustering{};
   Working w;
-  w.xyz.assign(points.data(), points.data() + 3 * n);
   w.index.resize(n);
-  for (std::size_t i = 0; i < n; ++i) w.index[i] = static_cast<Index>(i);
+  if (read_order && read_order->size() == n) {
+    w.xyz.resize(3 * n);
+    parallel_for(n, [&](std::size_t b, std::size_t e) {
+      for (std::size_t j = b; j < e; ++j) {
+        const Index i = (*read_order)[j];
+        w.index[j] = i;
+        for (int a = 0; a < 3; ++a) w.xyz[3 * j + a] = points(i, a);
+      }
+    });
+  } else {
+    w.xyz.assign(points.data(), points.data() + 3 * n);
+    for (std::size_t i = 0; i < n; ++i) w.index[i] = static_cast<Index>(i);
+  }
 
   // The split of a cluster depends on its points alone, so the large ones, which nearly all
   // get split, are split ahead of time in parallel subtrees; the best-first order below then

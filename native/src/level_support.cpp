@@ -25,13 +25,14 @@ Points support_centroids(const Points& level, const LevelSupport& support) {
   return out;
 }
 
-void choose_anchors(const Points& fine, const Points& level, LevelSupport& support) {
+void choose_anchors(const Points& fine, const Points& level, LevelSupport& support, const Index* rank) {
   support.anchors.assign(static_cast<std::size_t>(support.clusters), -1);
   std::vector<double> best(static_cast<std::size_t>(support.clusters), std::numeric_limits<double>::infinity());
   for (Eigen::Index i = 0; i < level.rows(); ++i) {
     const Index c = support.labels[i];
     const double d = (fine.row(i) - level.row(i)).squaredNorm();
-    if (d < best[c]) { best[c] = d; support.anchors[c] = static_cast<Index>(i); }
+    const Index a = support.anchors[c];
+    if (d < best[c] || (rank && a >= 0 && d == best[c] && rank[i] < rank[a])) { best[c] = d; support.anchors[c] = static_cast<Index>(i); }
   }
 }
 
@@ -293,9 +294,12 @@ void level_normals(const Points& level, const LevelSupport& support, const Point
 }
 
 Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
-                                  const std::vector<unsigned char>& clusters, IndexList& which) {
+                                  const std::vector<unsigned char>& clusters, IndexList& which,
+                                  const LabelGroups* layout) {
   // Taken cluster by cluster in the order support.local is stored in: rows[j] is which[j]'s row.
-  const LabelGroups groups = group_by_label(support.labels.data(), support.labels.size(), support.clusters);
+  const LabelGroups own = layout ? LabelGroups() : group_by_label(support.labels.data(), support.labels.size(),
+                                                                   support.clusters);
+  const LabelGroups& groups = layout ? *layout : own;
   which.clear();
   IndexList rows, labels;
   for (Index c = 0; c < support.clusters; ++c) {

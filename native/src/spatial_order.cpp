@@ -43,14 +43,17 @@ IndexList morton_order(const Points& points) {
   return order;
 }
 
-LabelGroups group_by_label(const Index* labels, std::size_t n, Index count) {
+LabelGroups group_by_label(const Index* labels, std::size_t n, Index count, const Index* visit) {
   LabelGroups g;
   g.offsets.assign(static_cast<std::size_t>(count) + 1, 0);
   for (std::size_t i = 0; i < n; ++i) ++g.offsets[static_cast<std::size_t>(labels[i]) + 1];
   for (std::size_t c = 0; c < static_cast<std::size_t>(count); ++c) g.offsets[c + 1] += g.offsets[c];
   g.members.resize(n);
   std::vector<Index> next(g.offsets.begin(), g.offsets.end() - 1);
-  for (std::size_t i = 0; i < n; ++i) g.members[static_cast<std::size_t>(next[labels[i]]++)] = static_cast<Index>(i);
+  for (std::size_t t = 0; t < n; ++t) {
+    const Index i = visit ? visit[t] : static_cast<Index>(t);
+    g.members[static_cast<std::size_t>(next[labels[i]]++)] = i;
+  }
   return g;
 }
 

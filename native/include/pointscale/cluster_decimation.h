@@ -13,7 +13,11 @@ struct Clustering {
 // first, until there are `target` clusters; a cluster whose surface variation exceeds
 // `max_variation` counts as four times its size, so curved regions get more, smaller clusters.
 // Clusters of identical points cannot be split, so fewer than `target` may come back.
-// points  #P by 3
-Clustering cluster_decimate(const Points& points, std::size_t target, double max_variation = 0.05);
+// points      #P by 3
+// read_order  #P: the order in which the points are read, or nullptr for 0..#P-1. The splits sum
+//             over the points in this order, so a caller that renumbers the points and passes
+//             the old numbering's order gets the same clusters, bit for bit.
+Clustering cluster_decimate(const Points& points, std::size_t target, double max_variation = 0.05,
+                            const IndexList* read_order = nullptr);
 
 }  // namespace pointscale

@@ -59,8 +59,10 @@ void level_normals(const Points& level, const LevelSupport& support, const Point
 // those clusters, cluster by cluster (which[j]: the point of row j). Each cluster's members
 // are fitted together as in level_normals, so the rows are bitwise the same as there.
 // clusters: flags, #C (nonzero: evaluate that cluster's members).
+// groups: the points grouped like support.local is laid out, if not by group_by_label(labels).
 Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
-                                  const std::vector<unsigned char>& clusters, IndexList& which);
+                                  const std::vector<unsigned char>& clusters, IndexList& which,
+                                  const LabelGroups* groups = nullptr);
 
 // The anchors' positions in the level. level  #P by 3; returns #C by 3 (or writes them into
 // out, reusing its storage).
@@ -68,8 +70,9 @@ Points support_centroids(const Points& level, const LevelSupport& support);
 void support_centroids(const Points& level, const LevelSupport& support, Points& out);
 
 // Picks each cluster's anchor: the member with the smallest |fine - level|, whose own normal then
-// barely depends on itself, so the offsets-along-normals condition converges quickly.
-void choose_anchors(const Points& fine, const Points& level, LevelSupport& support);
+// barely depends on itself, so the offsets-along-normals condition converges quickly. Among equals
+// the first in index order, or the one of lowest rank (#P) when given.
+void choose_anchors(const Points& fine, const Points& level, LevelSupport& support, const Index* rank = nullptr);
 
 // Unit normals at the query points, each fitted to the centroids around its cluster, with the
 // sign chosen so that n . reference >= 0 (a zero reference row keeps the eigenvector's sign).

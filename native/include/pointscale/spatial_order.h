@@ -14,13 +14,14 @@ namespace pointscale {
 IndexList morton_order(const Points& points);
 
 // The indices 0..#P-1 grouped by label (a counting sort): group c is
-// members[offsets[c] .. offsets[c + 1]), in index order. Taken in full, members is a spatial
-// order when the labels are (decimation clusters are numbered along their split tree).
+// members[offsets[c] .. offsets[c + 1]), in index order, or in the order of `visit` (#P, a
+// permutation of 0..#P-1) when given. Taken in full, members is a spatial order when the labels
+// are (decimation clusters are numbered along their split tree).
 // labels #P, each in [0, count).
 struct LabelGroups {
   std::vector<Index> offsets;  // #count + 1
   IndexList members;           // #P
 };
-LabelGroups group_by_label(const Index* labels, std::size_t n, Index count);
+LabelGroups group_by_label(const Index* labels, std::size_t n, Index count, const Index* visit = nullptr);
 
 }  // namespace pointscale
