@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <utility>
 
@@ -33,10 +32,9 @@ using FloatNormals = Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor>;
 // sign wherever the dot product is not near 0; there the finer level's normals are evaluated
 // again, exactly, for the clusters concerned (anchor_normals_of_clusters: bitwise as before).
 // finer_anchors #C by 3 and finer: the finer level's anchors and support.
-// finer_layout: the points grouped the way finer.local is laid out.
+// original: the points' input numbers, by which finer.local lists each cluster's points.
 std::vector<signed char> turn_signs(const FloatNormals& finer_normals, const Points& finer_anchors,
-                                    const LevelSupport& finer, const Points& normals,
-                                    const std::function<LabelGroups()>& finer_layout) {
+                                    const LevelSupport& finer, const Points& normals, const IndexList& original) {
   const Eigen::Index n = normals.rows();
   std::vector<signed char> turn(static_cast<std::size_t>(n));
   std::vector<unsigned char> unsure(static_cast<std::size_t>(n), 0);
@@ -54,8 +52,7 @@ std::vector<signed char> turn_signs(const FloatNormals& finer_normals, const Poi
   for (Eigen::Index i = 0; i < n; ++i) if (unsure[i]) { recompute[finer.labels[i]] = 1; any = true; }
   if (!any) return turn;
   IndexList which;
-  const LabelGroups layout = finer_layout();
-  const Points exact = anchor_normals_of_clusters(finer_anchors, finer, recompute, which, &layout);
+  const Points exact = anchor_normals_of_clusters(finer_anchors, finer, recompute, which, &original);
   for (std::size_t j = 0; j < which.size(); ++j)
     if (unsure[which[j]]) turn[which[j]] = sign(exact.row(static_cast<Eigen::Index>(j)).dot(normals.row(which[j])));
   return turn;
@@ -269,12 +266,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     // How this level's normals turn against the finer level's: all that orienting the finer
     // one needs once this one is oriented, so a level's normals are not held, nor computed
     // again, after the next step.
-    if (step > 0) {
-      const LevelSupport& finer = model.support[l];
-      turns[l] = turn_signs(finer_normals, finer_anchors, finer, normals, [&] {
-        return group_by_label(finer.labels.data(), finer.labels.size(), finer.clusters, inverse_order(original).data());
-      });
-    }
+    if (step > 0) turns[l] = turn_signs(finer_normals, finer_anchors, model.support[l], normals, original);
     finer_anchors = support_centroids(coarse, support);
     if (l == 1) normals0 = std::move(normals);
     else finer_normals = normals.cast<float>();
@@ -289,6 +281,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     report.pinned = consistency.pinned;
   }
 
+  release_free_memory();  // the last step's temporaries: the model is nearly all that is left
   // Orientation: level 0 from the input normals, or by propagation over the level-0 clusters;
   // every finer level agrees with the level below it at the same point (as reconstruction does).
   const ProgressStage last = all.sub(k / (k + 0.2), 1.0);

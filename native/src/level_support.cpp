@@ -295,20 +295,27 @@ void level_normals(const Points& level, const LevelSupport& support, const Point
 
 Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
                                   const std::vector<unsigned char>& clusters, IndexList& which,
-                                  const LabelGroups* layout) {
+                                  const IndexList* rank) {
   // Taken cluster by cluster in the order support.local is stored in: rows[j] is which[j]'s row.
-  const LabelGroups own = layout ? LabelGroups() : group_by_label(support.labels.data(), support.labels.size(),
-                                                                   support.clusters);
-  const LabelGroups& groups = layout ? *layout : own;
+  // Only the flagged clusters' points are listed (no grouping of all the points is made).
+  const std::size_t n = support.labels.size();
+  std::vector<Index> first(static_cast<std::size_t>(support.clusters) + 1, 0);  // each cluster's first row
+  for (Index c : support.labels) ++first[static_cast<std::size_t>(c) + 1];
+  for (std::size_t c = 0; c < static_cast<std::size_t>(support.clusters); ++c) first[c + 1] += first[c];
   which.clear();
-  IndexList rows, labels;
-  for (Index c = 0; c < support.clusters; ++c) {
-    if (!clusters[c]) continue;
-    for (Index t = groups.offsets[c]; t < groups.offsets[c + 1]; ++t) {
-      which.push_back(groups.members[static_cast<std::size_t>(t)]);
-      rows.push_back(t);
-      labels.push_back(c);
-    }
+  for (std::size_t i = 0; i < n; ++i)
+    if (clusters[support.labels[i]]) which.push_back(static_cast<Index>(i));
+  // By cluster, then in layout order within it: index order, or rank order when given.
+  std::stable_sort(which.begin(), which.end(), [&](Index a, Index b) {
+    const Index ca = support.labels[a], cb = support.labels[b];
+    if (ca != cb) return ca < cb;
+    return rank ? (*rank)[a] < (*rank)[b] : a < b;
+  });
+  IndexList rows(which.size()), labels(which.size());
+  for (std::size_t j = 0; j < which.size(); ++j) {
+    const Index c = support.labels[which[j]];
+    labels[j] = c;
+    rows[j] = j > 0 && labels[j - 1] == c ? rows[j - 1] + 1 : first[c];
   }
   Points normals;
   normals_at(static_cast<Eigen::Index>(which.size()), nullptr,

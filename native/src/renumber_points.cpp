@@ -1,5 +1,7 @@
 #include "pointscale/renumber_points.h"
 
+#include <vector>
+
 #include "pointscale/parallel.h"
 
 namespace pointscale {
@@ -25,13 +27,17 @@ IndexList number_by_groups(Points& points, IndexList& labels, LabelGroups& group
 
 namespace {
 
-// Row i moves to row to[i].
-void scatter_rows(Points& rows, const IndexList& to) {
-  Points out(rows.rows(), 3);
+// Value i of the strided sequence data[0], data[stride], ... moves to place to[i]. One sequence
+// (a coordinate, a band) at a time through an #P buffer: the model is complete by now, and a
+// copy of a whole n x 3 array here would set decompose's peak memory.
+void scatter_values(double* data, Eigen::Index stride, const IndexList& to, std::vector<double>& buffer) {
+  buffer.resize(to.size());
   parallel_for(to.size(), [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) out.row(to[i]) = rows.row(static_cast<Eigen::Index>(i));
+    for (std::size_t i = b; i < e; ++i) buffer[static_cast<std::size_t>(to[i])] = data[static_cast<Eigen::Index>(i) * stride];
   }, {}, 4096);
-  rows.swap(out);
+  parallel_for(to.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) data[static_cast<Eigen::Index>(i) * stride] = buffer[i];
+  }, {}, 4096);
 }
 
 }  // namespace
@@ -43,13 +49,11 @@ IndexList inverse_order(const IndexList& order) {
 }
 
 void renumber_model(MultiscaleModel& model, const IndexList& original) {
-  scatter_rows(model.base, original);
-  scatter_rows(model.base_normals, original);
-  Eigen::MatrixXd details(model.details.rows(), model.details.cols());
-  parallel_for(original.size(), [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) details.col(original[i]) = model.details.col(static_cast<Eigen::Index>(i));
-  }, {}, 4096);
-  model.details.swap(details);
+  std::vector<double> buffer;
+  for (Points* rows : {&model.base, &model.base_normals})
+    for (int a = 0; a < 3; ++a) scatter_values(rows->data() + a, 3, original, buffer);
+  const Eigen::Index bands = model.details.rows();  // column-major: band l is strided by `bands`
+  for (Eigen::Index l = 0; l < bands; ++l) scatter_values(model.details.data() + l, bands, original, buffer);
   // Labels and anchors; the frame coordinates stay as they are (see the header).
   for (LevelSupport& s : model.support) {
     IndexList labels(original.size());

@@ -59,10 +59,10 @@ void level_normals(const Points& level, const LevelSupport& support, const Point
 // those clusters, cluster by cluster (which[j]: the point of row j). Each cluster's members
 // are fitted together as in level_normals, so the rows are bitwise the same as there.
 // clusters: flags, #C (nonzero: evaluate that cluster's members).
-// groups: the points grouped like support.local is laid out, if not by group_by_label(labels).
+// rank: #P, when support.local lists each cluster's points by rank rather than by index.
 Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,
                                   const std::vector<unsigned char>& clusters, IndexList& which,
-                                  const LabelGroups* groups = nullptr);
+                                  const IndexList* rank = nullptr);
 
 // The anchors' positions in the level. level  #P by 3; returns #C by 3 (or writes them into
 // out, reusing its storage).
