@@ -17,6 +17,10 @@ struct CandidateSet {
   std::vector<double> h;        // #C kernel widths
   std::vector<double> extra;    // #C added to the squared distance in the weight (thin sheets), or 0
   std::vector<double> r2, e;    // #C workspace
+  // The k nearest of the last fit on this set (1 or 0 per candidate), and how many: usually the
+  // k nearest of the next fit too, which two vector passes confirm without a selection.
+  std::vector<double> last_nearest;
+  int last_count = 0;
   int size = 0;
 
   void resize(int count);
