@@ -19,10 +19,7 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) {
     order_.resize(static_cast<std::size_t>(n));
     std::iota(order_.begin(), order_.end(), 0);
   }
-  IndexList rank(order_.size());
-  parallel_for(order_.size(), [&](std::size_t b, std::size_t e) {
-    for (std::size_t r = b; r < e; ++r) rank[order_[r]] = static_cast<Index>(r);
-  }, {}, 16384);
+  const IndexList rank = inverse_order(order_);
 
   model_.base.resize(n, 3);
   model_.base_normals.resize(n, 3);

@@ -42,12 +42,6 @@ void scatter_values(double* data, Eigen::Index stride, const IndexList& to, std:
 
 }  // namespace
 
-IndexList inverse_order(const IndexList& order) {
-  IndexList out(order.size());
-  for (std::size_t t = 0; t < order.size(); ++t) out[static_cast<std::size_t>(order[t])] = static_cast<Index>(t);
-  return out;
-}
-
 void renumber_model(MultiscaleModel& model, const IndexList& original) {
   std::vector<double> buffer;
   for (Points* rows : {&model.base, &model.base_normals})

@@ -5,6 +5,8 @@
 #include <utility>
 #include <vector>
 
+#include "pointscale/parallel.h"
+
 namespace pointscale {
 
 namespace {
@@ -41,6 +43,14 @@ IndexList morton_order(const Points& points) {
   std::sort(keyed.begin(), keyed.end());
   for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
   return order;
+}
+
+IndexList inverse_order(const IndexList& order) {
+  IndexList out(order.size());
+  parallel_for(order.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t) out[static_cast<std::size_t>(order[t])] = static_cast<Index>(t);
+  }, {}, 16384);
+  return out;
 }
 
 LabelGroups group_by_label(const Index* labels, std::size_t n, Index count, const Index* visit) {

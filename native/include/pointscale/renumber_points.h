@@ -14,9 +14,6 @@ Points gather_rows(const Points& rows, const IndexList& order);
 // and groups then lists 0..#P-1. Returns original: point i was point original[i] before.
 IndexList number_by_groups(Points& points, IndexList& labels, LabelGroups& groups);
 
-// The inverse permutation: out[order[t]] = t. order #P, a permutation of 0..#P-1.
-IndexList inverse_order(const IndexList& order);
-
 // Renumbers a model whose point i is input point original[i] (#P) to the input's numbering: the
 // per-point arrays and each level's labels and anchors. The frame coordinates (support.local)
 // stay as they are: the caller lays them out by cluster with each cluster's points in input

@@ -13,6 +13,10 @@ namespace pointscale {
 // points #P by 3; returns #P indices into points.
 IndexList morton_order(const Points& points);
 
+// The inverse permutation: out[order[t]] = t, the place of each index in order (#P, a
+// permutation of 0..#P-1).
+IndexList inverse_order(const IndexList& order);
+
 // The indices 0..#P-1 grouped by label (a counting sort): group c is
 // members[offsets[c] .. offsets[c + 1]), in index order, or in the order of `visit` (#P, a
 // permutation of 0..#P-1) when given. Taken in full, members is a spatial order when the labels
