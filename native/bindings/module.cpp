@@ -15,6 +15,7 @@
 #include "pointscale/reconstruction.h"
 #include "pointscale/reconstructor.h"
 #include "pointscale/sample_spacing.h"
+#include "pointscale/self_knn.h"
 #include "pointscale/spatial_order.h"
 
 namespace py = pybind11;
@@ -325,6 +326,24 @@ PYBIND11_MODULE(_core, m) {
       return normals;
     });
   });
+
+  // Every point's k nearest among the points themselves (the rows decompose's kNN passes
+  // use), for tests against a brute-force search: (#P by k indices, #P by k squared distances).
+  m.def("self_knn", [](const DoubleArray& points, int k) {
+    Points p = to_points(points);
+    if (k < 1 || k > p.rows()) throw py::value_error("k must be between 1 and the number of points");
+    std::vector<Index> nearest(static_cast<std::size_t>(p.rows()) * k);
+    std::vector<double> d2(nearest.size());
+    without_gil([&] {
+      self_knn(SpatialIndex(p), k, [&](Index i, const Index* idx, const double* d, int found) {
+        std::copy(idx, idx + found, nearest.data() + static_cast<std::size_t>(i) * k);
+        std::copy(d, d + found, d2.data() + static_cast<std::size_t>(i) * k);
+      });
+      return 0;
+    });
+    const std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(p.rows()), k};
+    return py::make_tuple(to_array(nearest, shape), to_array(d2, shape));
+  }, py::arg("points"), py::arg("k"));
 
   bind_operators(m);
 }

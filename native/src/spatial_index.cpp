@@ -3,6 +3,7 @@
 #include <nanoflann.hpp>
 
 #include "pointscale/parallel.h"
+#include "pointscale/self_knn.h"
 
 namespace pointscale {
 
@@ -76,16 +77,13 @@ IndexList knn_graph(const SpatialIndex& index, int k, const ProgressStage& stage
   const Index n = index.size();
   k = std::min<int>(k, n);
   IndexList out(static_cast<std::size_t>(n) * k);
-  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-    std::vector<double> d2(k);
-    for (std::size_t i = b; i < e; ++i) {
-      Index* row = out.data() + i * k;
-      int found = index.knn(index.points().row(static_cast<Eigen::Index>(i)).data(), k, row, d2.data());
-      // Put the point itself first even among duplicates, so row i always starts with i.
-      for (int j = 0; j < found; ++j)
-        if (row[j] == static_cast<Index>(i)) { std::swap(row[0], row[j]); break; }
-      if (found > 0 && row[0] != static_cast<Index>(i)) row[0] = static_cast<Index>(i);
-    }
+  self_knn(index, k, [&](Index i, const Index* nearest, const double*, int found) {
+    Index* row = out.data() + static_cast<std::size_t>(i) * k;
+    std::copy(nearest, nearest + found, row);
+    // Put the point itself first even among duplicates, so row i always starts with i.
+    for (int j = 0; j < found; ++j)
+      if (row[j] == i) { std::swap(row[0], row[j]); break; }
+    if (found > 0 && row[0] != i) row[0] = i;
   }, stage);
   return out;
 }

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "pointscale/parallel.h"
+#include "pointscale/self_knn.h"
 #include "pointscale/sample_spacing.h"
 
 namespace pointscale {
@@ -18,14 +18,10 @@ SupportNeighbours support_neighbours(const SpatialIndex& index, int width, int s
   if (spacing) spacing->resize(n);
   const int w = out.width;
   const int spacing_query = std::min<int>(w, spacing_k + 8);
-  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-    std::vector<double> d2(static_cast<std::size_t>(w));
-    for (std::size_t i = b; i < e; ++i) {
-      Index* row = out.nearest.data() + i * w;
-      const int found = index.knn(index.points().row(static_cast<Eigen::Index>(i)).data(), w, row, d2.data());
-      out.reach(static_cast<Eigen::Index>(i)) = w == n ? std::numeric_limits<double>::infinity() : std::sqrt(d2[found - 1]);
-      if (spacing) (*spacing)(static_cast<Eigen::Index>(i)) = spacing_from_neighbours(d2.data(), std::min(found, spacing_query), spacing_k);
-    }
+  self_knn(index, w, [&](Index i, const Index* nearest, const double* d2, int found) {
+    std::copy(nearest, nearest + found, out.nearest.data() + static_cast<std::size_t>(i) * w);
+    out.reach(i) = w == n ? std::numeric_limits<double>::infinity() : std::sqrt(d2[found - 1]);
+    if (spacing) (*spacing)(i) = spacing_from_neighbours(d2, std::min(found, spacing_query), spacing_k);
   });
   if (spacing) fill_missing_spacing(*spacing);
   return out;
