@@ -145,8 +145,9 @@ void self_knn(const SpatialIndex& index, int k, const SelfKnnSink& emit, const P
   parallel_for(cells, [&](std::size_t b, std::size_t e) {
     std::vector<double> cx, cy, cz;
     std::vector<Index> cid;
-    std::vector<double> dist, fd;
-    std::vector<Index> fi;
+    std::vector<double> dist, fd, sd;
+    std::vector<Index> fi, si;
+    std::vector<std::uint32_t> bucket, count;
     std::vector<Index> idx(static_cast<std::size_t>(k));
     std::vector<double> d2(static_cast<std::size_t>(k));
     for (std::size_t c = b; c < e; ++c) {
@@ -184,6 +185,9 @@ void self_knn(const SpatialIndex& index, int k, const SelfKnnSink& emit, const P
       dist.resize(m);
       fd.resize(m);
       fi.resize(m);
+      sd.resize(m);
+      si.resize(m);
+      bucket.resize(m);
       const bool block_holds_all = m == static_cast<std::size_t>(n);
       const Vec3 low = g.origin + g.cell * Vec3(ix - 1, iy - 1, iz - 1);
       const Vec3 high = g.origin + g.cell * Vec3(ix + 2, iy + 2, iz + 2);
@@ -221,21 +225,41 @@ void self_knn(const SpatialIndex& index, int k, const SelfKnnSink& emit, const P
           last_reach = -1;
           continue;
         }
-        // Insertion into the sorted row, as nanoflann's result set does, over far fewer points.
-        int filled = 0;
+        // Sorted by a counting sort on the squared distance's bucket (on a surface the kept
+        // points spread about evenly over the buckets), then by an insertion sort, which has
+        // only the ties within a bucket left to order.
+        double largest = 0;
+        for (std::size_t t = 0; t < kept; ++t) largest = std::max(largest, fd[t]);
+        const std::size_t buckets = 2 * kept;
+        const double per_bucket = largest > 0 ? static_cast<double>(buckets) / largest : 0.0;
+        count.assign(buckets + 1, 0);
         for (std::size_t t = 0; t < kept; ++t) {
-          const double dv = fd[t];
-          const Index iv = fi[t];
-          if (filled == k && !(dv < d2[k - 1] || (dv == d2[k - 1] && iv < idx[k - 1]))) continue;
-          int at = filled < k ? filled++ : k - 1;
-          while (at > 0 && (d2[at - 1] > dv || (d2[at - 1] == dv && idx[at - 1] > iv))) {
-            d2[at] = d2[at - 1];
-            idx[at] = idx[at - 1];
+          bucket[t] = static_cast<std::uint32_t>(std::min<double>(static_cast<double>(buckets - 1), fd[t] * per_bucket));
+          ++count[bucket[t] + 1];
+        }
+        for (std::size_t u = 1; u <= buckets; ++u) count[u] += count[u - 1];
+        for (std::size_t t = 0; t < kept; ++t) {
+          const std::uint32_t at = count[bucket[t]]++;
+          sd[at] = fd[t];
+          si[at] = fi[t];
+        }
+        // Only the buckets up to the k-th point's need the insertion sort.
+        const double kth = sd[static_cast<std::size_t>(k) - 1];
+        const std::size_t sorted_end = count[static_cast<std::uint32_t>(std::min<double>(static_cast<double>(buckets - 1), kth * per_bucket))];
+        for (std::size_t t = 1; t < sorted_end; ++t) {
+          const double dv = sd[t];
+          const Index iv = si[t];
+          std::size_t at = t;
+          while (at > 0 && (sd[at - 1] > dv || (sd[at - 1] == dv && si[at - 1] > iv))) {
+            sd[at] = sd[at - 1];
+            si[at] = si[at - 1];
             --at;
           }
-          d2[at] = dv;
-          idx[at] = iv;
+          sd[at] = dv;
+          si[at] = iv;
         }
+        std::copy(sd.begin(), sd.begin() + k, d2.begin());
+        std::copy(si.begin(), si.begin() + k, idx.begin());
         last_reach = std::sqrt(d2[k - 1]);
         emit(self, idx.data(), d2.data(), k);
       }
