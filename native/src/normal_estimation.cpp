@@ -3,25 +3,20 @@
 #include <cmath>
 #include <queue>
 
-#include "pointscale/parallel.h"
 #include "pointscale/plane_fit.h"
+#include "pointscale/self_knn.h"
 
 namespace pointscale {
 
 Points pca_normals(const SpatialIndex& index, int k, const ProgressStage& stage) {
   const Index n = index.size();
   k = std::min<int>(k, n);
-  Points normals(n, 3);
+  Points normals = Points::Zero(n, 3);  // rows stay zero only when k < 1
   const Points& p = index.points();
-  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-    std::vector<Index> idx(k);
-    std::vector<double> d2(k), w(k, 1.0);
-    for (std::size_t i = b; i < e; ++i) {
-      const Vec3 x = p.row(static_cast<Eigen::Index>(i)).transpose();
-      const int found = index.knn(x.data(), k, idx.data(), d2.data());
-      const PlaneFit fit = fit_weighted_plane(p, idx.data(), w.data(), found, x);
-      normals.row(static_cast<Eigen::Index>(i)) = (fit.ok ? fit.normal : Vec3(Vec3::Zero())).transpose();
-    }
+  std::vector<double> w(static_cast<std::size_t>(k), 1.0);
+  self_knn(index, k, [&](Index i, const Index* idx, const double*, int found) {
+    const PlaneFit fit = fit_weighted_plane(p, idx, w.data(), found, p.row(i).transpose());
+    normals.row(i) = (fit.ok ? fit.normal : Vec3(Vec3::Zero())).transpose();
   }, stage);
   return normals;
 }

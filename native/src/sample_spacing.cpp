@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "pointscale/parallel.h"
+#include "pointscale/self_knn.h"
 
 namespace pointscale {
 
@@ -28,13 +28,8 @@ Eigen::VectorXd local_spacing(const SpatialIndex& index, int k) {
   const Index n = index.size();
   Eigen::VectorXd spacing(n);
   const int query = std::min<int>(n, k + 8);  // a few extra to step over duplicates
-  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-    std::vector<Index> idx(query);
-    std::vector<double> d2(query);
-    for (std::size_t i = b; i < e; ++i) {
-      const int found = index.knn(index.points().row(static_cast<Eigen::Index>(i)).data(), query, idx.data(), d2.data());
-      spacing(static_cast<Eigen::Index>(i)) = spacing_from_neighbours(d2.data(), found, k);
-    }
+  self_knn(index, query, [&](Index i, const Index*, const double* d2, int found) {
+    spacing(i) = spacing_from_neighbours(d2, found, k);
   });
   fill_missing_spacing(spacing);
   return spacing;

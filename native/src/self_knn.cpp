@@ -24,7 +24,7 @@ Key cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
 struct Grid {
   double cell = 0;
   Vec3 origin;
-  std::vector<Key> keys;            // per cell, ascending
+  std::vector<Key> keys;            // per cell
   std::vector<std::uint32_t> start; // #cells + 1: the cell's range in ids/xyz
   std::vector<Index> ids;           // the points, cell by cell
   std::vector<double> x, y, z;      // their coordinates, in the same order
@@ -45,50 +45,73 @@ struct Grid {
 };
 
 // Builds the grid, or returns false when the cloud is too large for the key's 21 bits a side.
+// Cells are numbered in the order their first point comes (a counting sort through the hash
+// table: a sort of the keys took most of the build).
 bool build_grid(const Points& p, double cell, Grid& g) {
   const Index n = static_cast<Index>(p.rows());
   g.cell = cell;
   g.origin = p.colwise().minCoeff().transpose();
   const Vec3 extent = p.colwise().maxCoeff().transpose() - g.origin;
   if (!(extent.maxCoeff() / cell < static_cast<double>(max_cells_per_axis))) return false;
-  std::vector<std::pair<Key, Index>> order(static_cast<std::size_t>(n));
+  std::vector<Key> key_of(static_cast<std::size_t>(n));
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {
       const auto q = p.row(static_cast<Eigen::Index>(i));
       const auto c = [&](int d) { return static_cast<std::int64_t>(std::floor((q(d) - g.origin(d)) / cell)); };
-      order[i] = {cell_key(c(0), c(1), c(2)), static_cast<Index>(i)};
+      key_of[i] = cell_key(c(0), c(1), c(2));
     }
   }, {}, 4096);
-  std::sort(order.begin(), order.end());
+  // The table doubles whenever it is half full (cells hold several points each: a table for
+  // one per point would cost more to clear than the rest of the build).
+  std::vector<std::uint32_t> cell_of(static_cast<std::size_t>(n));
+  std::vector<std::uint32_t> count;
+  g.keys.clear();
+  auto rehash = [&](std::size_t size) {
+    g.shift = 64;
+    for (std::size_t s = size; s > 1; s /= 2) --g.shift;
+    g.mask = size - 1;
+    g.table_key.assign(size, 0);
+    g.table_cell.assign(size, std::numeric_limits<std::uint32_t>::max());
+    for (std::size_t c = 0; c < g.keys.size(); ++c) {
+      std::uint64_t s = g.slot(g.keys[c]);
+      while (g.table_cell[s] != std::numeric_limits<std::uint32_t>::max()) s = (s + 1) & g.mask;
+      g.table_key[s] = g.keys[c];
+      g.table_cell[s] = static_cast<std::uint32_t>(c);
+    }
+  };
+  rehash(1024);
+  for (Index i = 0; i < n; ++i) {
+    const Key key = key_of[static_cast<std::size_t>(i)];
+    std::uint64_t s = g.slot(key);
+    while (g.table_cell[s] != std::numeric_limits<std::uint32_t>::max() && g.table_key[s] != key) s = (s + 1) & g.mask;
+    if (g.table_cell[s] == std::numeric_limits<std::uint32_t>::max()) {
+      g.keys.push_back(key);
+      count.push_back(0);
+      if (2 * g.keys.size() > g.mask + 1) {
+        rehash(2 * (g.mask + 1));
+        s = g.slot(key);
+        while (g.table_key[s] != key) s = (s + 1) & g.mask;
+      } else {
+        g.table_key[s] = key;
+        g.table_cell[s] = static_cast<std::uint32_t>(g.keys.size() - 1);
+      }
+    }
+    cell_of[static_cast<std::size_t>(i)] = g.table_cell[s];
+    ++count[g.table_cell[s]];
+  }
+  g.start.assign(g.keys.size() + 1, 0);
+  for (std::size_t c = 0; c < g.keys.size(); ++c) g.start[c + 1] = g.start[c] + count[c];
+  std::vector<std::uint32_t> next(g.start.begin(), g.start.end() - 1);
   g.ids.resize(n);
   g.x.resize(n);
   g.y.resize(n);
   g.z.resize(n);
-  g.keys.clear();
-  g.start.clear();
-  for (Index j = 0; j < n; ++j) {
-    const auto [key, i] = order[static_cast<std::size_t>(j)];
-    if (g.keys.empty() || g.keys.back() != key) {
-      g.keys.push_back(key);
-      g.start.push_back(static_cast<std::uint32_t>(j));
-    }
+  for (Index i = 0; i < n; ++i) {
+    const std::uint32_t j = next[cell_of[static_cast<std::size_t>(i)]]++;
     g.ids[j] = i;
     g.x[j] = p(i, 0);
     g.y[j] = p(i, 1);
     g.z[j] = p(i, 2);
-  }
-  g.start.push_back(static_cast<std::uint32_t>(n));
-  std::size_t size = 16;
-  g.shift = 60;
-  while (size < 2 * g.keys.size()) size *= 2, --g.shift;
-  g.mask = size - 1;
-  g.table_key.assign(size, 0);
-  g.table_cell.assign(size, std::numeric_limits<std::uint32_t>::max());
-  for (std::size_t c = 0; c < g.keys.size(); ++c) {
-    std::uint64_t s = g.slot(g.keys[c]);
-    while (g.table_cell[s] != std::numeric_limits<std::uint32_t>::max()) s = (s + 1) & g.mask;
-    g.table_key[s] = g.keys[c];
-    g.table_cell[s] = static_cast<std::uint32_t>(c);
   }
   return true;
 }
