@@ -82,7 +82,12 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
   const int k = support.neighbors;
   const double never = std::numeric_limits<double>::infinity();
   std::vector<double> moves(c_count, never), damping(c_count, 1.0), earlier(c_count, never);
-  std::vector<unsigned char> pinned(c_count, 0), active(c_count, 1);
+  std::vector<unsigned char> pinned(c_count, 0), active(c_count, 0);
+  // The anchors to move next (flagged in `active`), listed so that an iteration costs in
+  // proportion to them: a real scan takes hundreds of iterations over a few anchors each
+  // (the dragon: 305, 530 and 444 at 109k, 27k and 7k clusters).
+  std::vector<Index> woken(static_cast<std::size_t>(c_count));
+  for (Index c = 0; c < c_count; ++c) { woken[c] = c; active[c] = 1; }
   std::vector<Index> todo;
   Points anchors = support_centroids(level, support);  // kept equal to the anchors' rows of level
   Consistency out;
@@ -94,8 +99,9 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
       if (it == max_iterations / 2) earlier = moves;
       // Only anchors that moved, or whose neighbours moved, can move again; once none is left,
       // one sweep over all of them confirms that they have settled.
+      std::sort(woken.begin(), woken.end());
       todo.clear();
-      for (Index c = 0; c < c_count; ++c) if (active[c] && !pinned[c]) todo.push_back(c);
+      for (const Index c : woken) if (!pinned[c]) todo.push_back(c);
       const bool sweep = todo.empty();
       if (sweep) for (Index c = 0; c < c_count; ++c) if (!pinned[c]) todo.push_back(c);
       Points query(static_cast<Eigen::Index>(todo.size()), 3), query_reference(query.rows(), 3);
@@ -103,7 +109,7 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
         query.row(j) = anchors.row(todo[j]);
         query_reference.row(j) = anchor_reference.row(todo[j]);
       }
-      const Points normals = support_normals(query, todo.data(), anchors, support, query_reference);
+      const Points normals = support_normals_of(query, todo, anchors, support, query_reference);
       parallel_for(todo.size(), [&](std::size_t b, std::size_t e) {
         for (std::size_t j = b; j < e; ++j) {
           const Index c = todo[j];
@@ -121,16 +127,18 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
         }
       });
       largest = 0.0;
-      std::fill(active.begin(), active.end(), 0);
+      for (const Index c : woken) active[c] = 0;
+      woken.clear();
       for (const Index c : todo) {
         if (!(moves[c] > stop)) continue;
         largest = std::max(largest, moves[c]);
         const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(c) * k;
-        for (int j = 0; j < k; ++j) active[nb[j]] = 1;
+        for (int j = 0; j < k; ++j)
+          if (!active[nb[j]]) { active[nb[j]] = 1; woken.push_back(nb[j]); }
       }
       if (largest <= stop && sweep) { settled = true; break; }
       // A neighbour woken by another's move starts afresh: its small old move is no measure.
-      for (Index c = 0; c < c_count; ++c) if (active[c] && moves[c] <= stop) moves[c] = never;
+      for (const Index c : woken) if (moves[c] <= stop) moves[c] = never;
     }
     out.residual = largest;
     if (settled) break;
@@ -146,7 +154,9 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
         anchors.row(c) = level.row(support.anchors[c]);
       }
     std::fill(moves.begin(), moves.end(), never);
-    std::fill(active.begin(), active.end(), 1);
+    for (const Index c : woken) active[c] = 0;
+    woken.resize(static_cast<std::size_t>(c_count));
+    for (Index c = 0; c < c_count; ++c) { woken[c] = c; active[c] = 1; }
   }
   Points().swap(anchors);  // level_normals takes its own copy
   // The iteration's temporaries go back to the system before the peak. This is the only trim

@@ -60,13 +60,15 @@ inline void prefetch_line(const void* p) {
 // cluster's rotation (#C).
 // cached_groups: the queries grouped by query_labels (group_by_label, or any grouping with the same
 // groups), if the caller has them already.
+// only: if given, the clusters to work on (the others are skipped without a look), and
+// cached_groups, required then, groups the queries by place in that list.
 // Writes into `normals`, whose storage is reused when it has n rows already (reconstruction
 // alternates two buffers: fresh pages cost it more than the copies it saves).
 template <class FillQueries>
 void normals_at(Eigen::Index n, const Points* point_rows, const FillQueries& fill_queries, const Index* query_labels,
                 const Points& centroids, const LevelSupport& support, const Points& reference,
                 const ProgressStage& stage, Points& normals, const std::vector<Mat3>* reference_rotation = nullptr,
-                const LabelGroups* cached_groups = nullptr) {
+                const LabelGroups* cached_groups = nullptr, const IndexList* only = nullptr) {
   const int k = support.neighbors;
   const bool has_reference = reference.rows() > 0;
   // Weights floored (plane_fit.h): the normal must be a smooth function of the anchors, since
@@ -75,7 +77,8 @@ void normals_at(Eigen::Index n, const Points* point_rows, const FillQueries& fil
                                         : group_by_label(query_labels, static_cast<std::size_t>(n), support.clusters);
   const LabelGroups& groups = cached_groups ? *cached_groups : own;
   normals.resize(n, 3);
-  const std::size_t clusters = static_cast<std::size_t>(support.clusters);
+  // The clusters worked on: all, or the listed ones, whose groups are then by place in the list.
+  const std::size_t clusters = only ? only->size() : static_cast<std::size_t>(support.clusters);
   const std::size_t chunk = std::max<std::size_t>(1, 512 * clusters / std::max<std::size_t>(1, n));
   parallel_for(clusters, [&](std::size_t b, std::size_t e) {
     PlaneStencil stencil;
@@ -129,17 +132,17 @@ void normals_at(Eigen::Index n, const Points* point_rows, const FillQueries& fil
       }
     };
     for (std::size_t a = b; a < b + 3; ++a) prefetch(a);
-    for (std::size_t cc = b; cc < e; ++cc) {
-      prefetch(cc + 3);
-      const Index c = static_cast<Index>(cc);
-      const Index* members = groups.members.data() + groups.offsets[cc];
-      const int m = groups.offsets[cc + 1] - groups.offsets[cc];
+    for (std::size_t t = b; t < e; ++t) {
+      prefetch(t + 3);
+      const Index c = only ? (*only)[t] : static_cast<Index>(t);
+      const Index* members = groups.members.data() + groups.offsets[t];
+      const int m = groups.offsets[t + 1] - groups.offsets[t];
       if (m == 0) continue;
-      const Index* nb = support.neighborhoods.data() + cc * static_cast<std::size_t>(k);
+      const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(c) * k;
       stencil.assign(centroids, nb, k, support.h, centroids.row(c).transpose());
       const auto mm = static_cast<std::size_t>(m);
       queries.resize(3 * mm); cov.resize(6 * mm); trace.resize(mm); valid.resize(mm);
-      fill_queries(c, groups.offsets[cc], members, m, queries.data());
+      fill_queries(c, groups.offsets[t], members, m, queries.data());
       stencil_covariances(stencil, queries.data(), m, weight_floor, cov.data(), trace.data(), valid.data());
       for (int t = 0; t < m; ++t) {
         const int l = pending.count++;
@@ -159,6 +162,27 @@ void normals_at(Eigen::Index n, const Points* point_rows, const FillQueries& fil
 }
 
 }  // namespace
+
+Points support_normals_of(const Points& query, const IndexList& clusters, const Points& centroids,
+                          const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
+  Points normals;
+  // One query per listed cluster: group t is query t alone.
+  LabelGroups groups;
+  groups.offsets.resize(clusters.size() + 1);
+  groups.members.resize(clusters.size());
+  for (std::size_t t = 0; t < clusters.size(); ++t) {
+    groups.offsets[t] = static_cast<Index>(t);
+    groups.members[t] = static_cast<Index>(t);
+  }
+  groups.offsets[clusters.size()] = static_cast<Index>(clusters.size());
+  normals_at(query.rows(), &query,
+             [&](Index c, Index, const Index* members, int m, double* q) {
+               for (int t = 0; t < m; ++t)
+                 for (int a = 0; a < 3; ++a) q[3 * t + a] = query(members[t], a) - centroids(c, a);
+             },
+             clusters.data(), centroids, support, reference, stage, normals, nullptr, &groups, &clusters);
+  return normals;
+}
 
 Points support_normals(const Points& query, const Index* query_labels, const Points& centroids,
                        const LevelSupport& support, const Points& reference, const ProgressStage& stage) {

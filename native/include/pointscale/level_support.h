@@ -84,6 +84,12 @@ Points support_normals(const Points& query, const Index* query_labels, const Poi
                        const LevelSupport& support, const Points& reference,
                        const ProgressStage& stage = {});
 
+// support_normals with one query per listed cluster: query t is in cluster clusters[t] (#Q,
+// each cluster at most once). The work is in proportion to #Q, not #C: the consistency
+// iteration of a decomposition asks for fewer and fewer of a level's anchors.
+Points support_normals_of(const Points& query, const IndexList& clusters, const Points& centroids,
+                          const LevelSupport& support, const Points& reference, const ProgressStage& stage = {});
+
 // Orientation references for an edited level 0: the rotation per cluster that best maps the
 // cluster's neighbourhood onto the edited one (Kabsch). Each stored oriented normal, turned by
 // its cluster's rotation, orients the edited level's normal, so the sign stays right even where
