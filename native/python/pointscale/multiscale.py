@@ -64,9 +64,10 @@ class Decomposition:
 
     def _levels(self):
         if "levels" not in self._cache:
-            levels, normals = self._model.reconstruct(np.ones(self.n_bands), None, True)
-            self._cache["levels"] = [lv + self.origin for lv in levels]
-            self._cache["normals"] = normals
+            # The core adds the origin in place (a NumPy sum would allocate every level again).
+            levels, normals = self._model.reconstruct(np.ones(self.n_bands), None, True, -1, None, self.origin)
+            self._cache["levels"] = list(levels)
+            self._cache["normals"] = list(normals)
         return self._cache["levels"], self._cache["normals"]
 
     def level(self, l: int) -> np.ndarray:
