@@ -18,6 +18,11 @@ SupportNeighbours support_neighbours(const SpatialIndex& index, int width, int s
   if (spacing) spacing->resize(n);
   const int w = out.width;
   const int spacing_query = std::min<int>(w, spacing_k + 8);
+  if (w == 0) {  // no rows asked for: nothing bounds a query, and no spacing is known
+    out.reach.setConstant(std::numeric_limits<double>::infinity());
+    if (spacing) spacing->setZero();
+    return out;
+  }
   self_knn(index, w, [&](Index i, const Index* nearest, const double* d2, int found) {
     std::copy(nearest, nearest + found, out.nearest.data() + static_cast<std::size_t>(i) * w);
     out.reach(i) = w == n ? std::numeric_limits<double>::infinity() : std::sqrt(d2[found - 1]);

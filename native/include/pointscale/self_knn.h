@@ -3,7 +3,10 @@
 // them: the points of a cell share one gathered candidate set (the 27 cells around it), and a
 // row is exact when its k-th distance is below the distance to that block's border; a query
 // for which it is not goes to the kd-tree. Same answers as SpatialIndex::knn, except that
-// points at exactly the same distance come in index order here (nanoflann: in its visit order).
+// points at exactly the same distance come in index order in the rows the grid answers (the
+// rows the tree answers, and every row of a set under 4096 points, keep nanoflann's visit
+// order). The squared distances are summed as nanoflann sums them, and both files are built
+// without contracting multiply-adds, so that the two kinds of rows agree to the bit.
 #pragma once
 #include <functional>
 
