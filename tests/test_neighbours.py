@@ -28,8 +28,14 @@ def brute_force_squared_distances(points: np.ndarray, rows: slice) -> np.ndarray
     return dx * dx + dy * dy + dz * dz
 
 
-def test_rows_are_the_exact_nearest():
-    points = awkward_cloud()
+def lattice() -> np.ndarray:
+    """A 70 x 70 grid of unit spacing: every row ends among points at equal distances."""
+    return np.stack(np.meshgrid(np.arange(70.0), np.arange(70.0), [0.0], indexing="ij"), -1).reshape(-1, 3)
+
+
+@pytest.mark.parametrize("make", [awkward_cloud, lattice])
+def test_rows_are_the_exact_nearest(make):
+    points = make()
     assert len(points) > 4096  # past the size below which the tree alone answers
     ks = (1, 6, 24, 40)
     found = {k: _core.self_knn(points, k) for k in ks}
