@@ -334,20 +334,42 @@ PYBIND11_MODULE(_core, m) {
 
   // Every point's k nearest among the points themselves (the rows decompose's kNN passes
   // use), for tests against a brute-force search: (#P by k indices, #P by k squared distances).
+  // Written straight into the NumPy arrays, so that bench/knn_bench.py times the search.
   m.def("self_knn", [](const DoubleArray& points, int k) {
     Points p = to_points(points);
     if (k < 1 || k > p.rows()) throw py::value_error("k must be between 1 and the number of points");
-    std::vector<Index> nearest(static_cast<std::size_t>(p.rows()) * k);
-    std::vector<double> d2(nearest.size());
+    py::array_t<Index> nearest({static_cast<py::ssize_t>(p.rows()), static_cast<py::ssize_t>(k)});
+    py::array_t<double> d2({static_cast<py::ssize_t>(p.rows()), static_cast<py::ssize_t>(k)});
+    Index* rows = nearest.mutable_data();
+    double* dist = d2.mutable_data();
     without_gil([&] {
       self_knn(SpatialIndex(p), k, [&](Index i, const Index* idx, const double* d, int found) {
-        std::copy(idx, idx + found, nearest.data() + static_cast<std::size_t>(i) * k);
-        std::copy(d, d + found, d2.data() + static_cast<std::size_t>(i) * k);
+        std::copy(idx, idx + found, rows + static_cast<std::size_t>(i) * k);
+        std::copy(d, d + found, dist + static_cast<std::size_t>(i) * k);
       });
       return 0;
     });
-    const std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(p.rows()), k};
-    return py::make_tuple(to_array(nearest, shape), to_array(d2, shape));
+    return py::make_tuple(nearest, d2);
+  }, py::arg("points"), py::arg("k"));
+
+  // The same rows from a kd-tree query per point (what self_knn replaced), for the benchmark
+  // that compares the two (bench/knn_bench.py).
+  m.def("kdtree_knn", [](const DoubleArray& points, int k) {
+    Points p = to_points(points);
+    if (k < 1 || k > p.rows()) throw py::value_error("k must be between 1 and the number of points");
+    py::array_t<Index> nearest({static_cast<py::ssize_t>(p.rows()), static_cast<py::ssize_t>(k)});
+    py::array_t<double> d2({static_cast<py::ssize_t>(p.rows()), static_cast<py::ssize_t>(k)});
+    Index* rows = nearest.mutable_data();
+    double* dist = d2.mutable_data();
+    without_gil([&] {
+      const SpatialIndex index(p);
+      parallel_for(static_cast<std::size_t>(p.rows()), [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i)
+          index.knn(p.row(static_cast<Eigen::Index>(i)).data(), k, rows + i * k, dist + i * k);
+      });
+      return 0;
+    });
+    return py::make_tuple(nearest, d2);
   }, py::arg("points"), py::arg("k"));
 
   bind_operators(m);

@@ -1,0 +1,82 @@
+#!/usr/bin/env python3
+"""Every point's k nearest among the points themselves: the grid of self_knn.h against a
+kd-tree query per point (nanoflann), on the same points, side by side (figures only).
+
+    python bench/knn_bench.py [--threads 2] [--reps 3]
+
+The synthetic set is what a 1M decomposition's first step asks about: the 250k centroids of
+the decimated 1M bumpy sphere, in their cluster (spatial) order. The dragon's 437k raw points
+follow, Morton-sorted, when ../shared/data has them. Both sides include their setup (the
+tree's build; the grid's sample, build and fallback tree). Rows are checked equal in distance.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import pointscale  # noqa: E402
+from pointscale import _core  # noqa: E402
+from run import bumpy_sphere, read_ply_xyz  # noqa: E402
+
+
+def morton_sorted(points: np.ndarray) -> np.ndarray:
+    q = ((points - points.min(0)) / max(np.ptp(points, 0).max(), 1e-300) * (2**20 - 1)).astype(np.uint64)
+
+    def spread(v):
+        v = v & np.uint64(0x1FFFFF)
+        for shift, mask in ((32, 0x1F00000000FFFF), (16, 0x1F0000FF0000FF), (8, 0x100F00F00F00F00F),
+                            (4, 0x10C30C30C30C30C3), (2, 0x1249249249249249)):
+            v = (v | (v << np.uint64(shift))) & np.uint64(mask)
+        return v
+
+    key = spread(q[:, 0]) | (spread(q[:, 1]) << np.uint64(1)) | (spread(q[:, 2]) << np.uint64(2))
+    return points[np.argsort(key, kind="stable")]
+
+
+def best(fn, reps):
+    times, out = [], None
+    for _ in range(reps):
+        t = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t)
+    return min(times), out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--data-dir", default=str(Path(__file__).resolve().parents[2] / "shared" / "data"))
+    args = ap.parse_args()
+    _core.set_threads(args.threads)
+
+    sets = []
+    sphere = bumpy_sphere(1_000_000)
+    centroids, _ = pointscale.decimate(sphere - sphere.mean(0), 250_000)
+    sets.append(("250k centroids of the 1M sphere", np.ascontiguousarray(centroids)))
+    dragon = Path(args.data_dir) / "dragon.ply"
+    if dragon.exists():
+        sets.append(("dragon 437k, Morton order", np.ascontiguousarray(morton_sorted(read_ply_xyz(str(dragon))))))
+    else:
+        print(f"({dragon} not found: the dragon row is skipped)")
+
+    print(f"threads {args.threads}, best of {args.reps}")
+    print("| points | k | grid (s) | kd-tree (s) | speed-up | rows equal in distance |")
+    print("|---|---|---|---|---|---|")
+    for name, pts in sets:
+        for k in (24, 40):
+            g, (gi, gd) = best(lambda: _core.self_knn(pts, k), args.reps)
+            t, (ti, td) = best(lambda: _core.kdtree_knn(pts, k), args.reps)
+            same = bool(np.array_equal(gd, td))
+            print(f"| {name} | {k} | {g:.3f} | {t:.3f} | {t / g:.2f}x | {same} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
