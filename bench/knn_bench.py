@@ -22,21 +22,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import pointscale  # noqa: E402
 from pointscale import _core  # noqa: E402
-from run import bumpy_sphere, read_ply_xyz  # noqa: E402
-
-
-def morton_sorted(points: np.ndarray) -> np.ndarray:
-    q = ((points - points.min(0)) / max(np.ptp(points, 0).max(), 1e-300) * (2**20 - 1)).astype(np.uint64)
-
-    def spread(v):
-        v = v & np.uint64(0x1FFFFF)
-        for shift, mask in ((32, 0x1F00000000FFFF), (16, 0x1F0000FF0000FF), (8, 0x100F00F00F00F00F),
-                            (4, 0x10C30C30C30C30C3), (2, 0x1249249249249249)):
-            v = (v | (v << np.uint64(shift))) & np.uint64(mask)
-        return v
-
-    key = spread(q[:, 0]) | (spread(q[:, 1]) << np.uint64(1)) | (spread(q[:, 2]) << np.uint64(2))
-    return points[np.argsort(key, kind="stable")]
+from run import bumpy_sphere, morton_order, read_ply_xyz  # noqa: E402
 
 
 def best(fn, reps):
@@ -62,7 +48,8 @@ def main() -> int:
     sets.append(("250k centroids of the 1M sphere", np.ascontiguousarray(centroids)))
     dragon = Path(args.data_dir) / "dragon.ply"
     if dragon.exists():
-        sets.append(("dragon 437k, Morton order", np.ascontiguousarray(morton_sorted(read_ply_xyz(str(dragon))))))
+        scan = read_ply_xyz(str(dragon))
+        sets.append(("dragon 437k, Morton order", np.ascontiguousarray(scan[morton_order(scan)])))
     else:
         print(f"({dragon} not found: the dragon row is skipped)")
 

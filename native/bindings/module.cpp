@@ -95,6 +95,24 @@ auto without_gil(F&& f) {
   }
 }
 
+// (#P by k indices, #P by k squared distances) of every point's k nearest among `points`,
+// which fill(index, rows, distances) writes straight into the NumPy arrays (no copy to time).
+template <class Fill>
+py::tuple knn_rows(const DoubleArray& points, int k, const Fill& fill) {
+  Points p = to_points(points);
+  if (k < 1 || k > p.rows()) throw py::value_error("k must be between 1 and the number of points");
+  const std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(p.rows()), k};
+  py::array_t<Index> nearest(shape);
+  py::array_t<double> d2(shape);
+  Index* rows = nearest.mutable_data();
+  double* dist = d2.mutable_data();
+  without_gil([&] {
+    fill(SpatialIndex(p), rows, dist);
+    return 0;
+  });
+  return py::make_tuple(nearest, d2);
+}
+
 py::dict report_dict(const LevelReport& r) {
   py::dict d;
   d["support_points"] = r.support_points;
@@ -333,43 +351,23 @@ PYBIND11_MODULE(_core, m) {
   });
 
   // Every point's k nearest among the points themselves (the rows decompose's kNN passes
-  // use), for tests against a brute-force search: (#P by k indices, #P by k squared distances).
-  // Written straight into the NumPy arrays, so that bench/knn_bench.py times the search.
+  // use), for tests against a brute-force search, and the same rows from a kd-tree query per
+  // point (what self_knn replaced), for bench/knn_bench.py.
   m.def("self_knn", [](const DoubleArray& points, int k) {
-    Points p = to_points(points);
-    if (k < 1 || k > p.rows()) throw py::value_error("k must be between 1 and the number of points");
-    py::array_t<Index> nearest({static_cast<py::ssize_t>(p.rows()), static_cast<py::ssize_t>(k)});
-    py::array_t<double> d2({static_cast<py::ssize_t>(p.rows()), static_cast<py::ssize_t>(k)});
-    Index* rows = nearest.mutable_data();
-    double* dist = d2.mutable_data();
-    without_gil([&] {
-      self_knn(SpatialIndex(p), k, [&](Index i, const Index* idx, const double* d, int found) {
+    return knn_rows(points, k, [&](const SpatialIndex& index, Index* rows, double* dist) {
+      self_knn(index, k, [&](Index i, const Index* idx, const double* d, int found) {
         std::copy(idx, idx + found, rows + static_cast<std::size_t>(i) * k);
         std::copy(d, d + found, dist + static_cast<std::size_t>(i) * k);
       });
-      return 0;
     });
-    return py::make_tuple(nearest, d2);
   }, py::arg("points"), py::arg("k"));
-
-  // The same rows from a kd-tree query per point (what self_knn replaced), for the benchmark
-  // that compares the two (bench/knn_bench.py).
   m.def("kdtree_knn", [](const DoubleArray& points, int k) {
-    Points p = to_points(points);
-    if (k < 1 || k > p.rows()) throw py::value_error("k must be between 1 and the number of points");
-    py::array_t<Index> nearest({static_cast<py::ssize_t>(p.rows()), static_cast<py::ssize_t>(k)});
-    py::array_t<double> d2({static_cast<py::ssize_t>(p.rows()), static_cast<py::ssize_t>(k)});
-    Index* rows = nearest.mutable_data();
-    double* dist = d2.mutable_data();
-    without_gil([&] {
-      const SpatialIndex index(p);
-      parallel_for(static_cast<std::size_t>(p.rows()), [&](std::size_t b, std::size_t e) {
+    return knn_rows(points, k, [&](const SpatialIndex& index, Index* rows, double* dist) {
+      parallel_for(static_cast<std::size_t>(index.size()), [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i)
-          index.knn(p.row(static_cast<Eigen::Index>(i)).data(), k, rows + i * k, dist + i * k);
+          index.knn(index.points().row(static_cast<Eigen::Index>(i)).data(), k, rows + i * k, dist + i * k);
       });
-      return 0;
     });
-    return py::make_tuple(nearest, d2);
   }, py::arg("points"), py::arg("k"));
 
   bind_operators(m);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <utility>
 
 #include "pointscale/cluster_decimation.h"
@@ -86,8 +87,13 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
   // The anchors to move next (flagged in `active`), listed so that an iteration costs in
   // proportion to them: a real scan takes hundreds of iterations over a few anchors each
   // (the dragon: 305, 530 and 444 at 109k, 27k and 7k clusters).
-  std::vector<Index> woken(static_cast<std::size_t>(c_count));
-  for (Index c = 0; c < c_count; ++c) { woken[c] = c; active[c] = 1; }
+  std::vector<Index> woken;
+  auto wake_all = [&] {
+    woken.resize(static_cast<std::size_t>(c_count));
+    std::iota(woken.begin(), woken.end(), 0);
+    std::fill(active.begin(), active.end(), 1);
+  };
+  wake_all();
   std::vector<Index> todo;
   Points anchors = support_centroids(level, support);  // kept equal to the anchors' rows of level
   Consistency out;
@@ -154,9 +160,7 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
         anchors.row(c) = level.row(support.anchors[c]);
       }
     std::fill(moves.begin(), moves.end(), never);
-    for (const Index c : woken) active[c] = 0;
-    woken.resize(static_cast<std::size_t>(c_count));
-    for (Index c = 0; c < c_count; ++c) { woken[c] = c; active[c] = 1; }
+    wake_all();
   }
   Points().swap(anchors);  // level_normals takes its own copy
   // The iteration's temporaries go back to the system before the peak. This is the only trim

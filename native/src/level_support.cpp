@@ -5,6 +5,7 @@
 #include <Eigen/SVD>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 #include "pointscale/batched_eigen.h"
 #include "pointscale/parallel.h"
@@ -161,6 +162,14 @@ void normals_at(Eigen::Index n, const Points* point_rows, const FillQueries& fil
   }, stage, chunk);
 }
 
+// fill_queries for queries given as positions (#Q by 3): each relative to its cluster's centroid.
+auto relative_to_centroid(const Points& query, const Points& centroids) {
+  return [&query, &centroids](Index c, Index, const Index* members, int m, double* q) {
+    for (int t = 0; t < m; ++t)
+      for (int a = 0; a < 3; ++a) q[3 * t + a] = query(members[t], a) - centroids(c, a);
+  };
+}
+
 }  // namespace
 
 Points support_normals_of(const Points& query, const IndexList& clusters, const Points& centroids,
@@ -170,29 +179,18 @@ Points support_normals_of(const Points& query, const IndexList& clusters, const 
   LabelGroups groups;
   groups.offsets.resize(clusters.size() + 1);
   groups.members.resize(clusters.size());
-  for (std::size_t t = 0; t < clusters.size(); ++t) {
-    groups.offsets[t] = static_cast<Index>(t);
-    groups.members[t] = static_cast<Index>(t);
-  }
-  groups.offsets[clusters.size()] = static_cast<Index>(clusters.size());
-  normals_at(query.rows(), &query,
-             [&](Index c, Index, const Index* members, int m, double* q) {
-               for (int t = 0; t < m; ++t)
-                 for (int a = 0; a < 3; ++a) q[3 * t + a] = query(members[t], a) - centroids(c, a);
-             },
-             clusters.data(), centroids, support, reference, stage, normals, nullptr, &groups, &clusters);
+  std::iota(groups.offsets.begin(), groups.offsets.end(), 0);
+  std::iota(groups.members.begin(), groups.members.end(), 0);
+  normals_at(query.rows(), &query, relative_to_centroid(query, centroids), clusters.data(), centroids, support,
+             reference, stage, normals, nullptr, &groups, &clusters);
   return normals;
 }
 
 Points support_normals(const Points& query, const Index* query_labels, const Points& centroids,
                        const LevelSupport& support, const Points& reference, const ProgressStage& stage) {
   Points normals;
-  normals_at(query.rows(), &query,
-             [&](Index c, Index, const Index* members, int m, double* q) {
-               for (int t = 0; t < m; ++t)
-                 for (int a = 0; a < 3; ++a) q[3 * t + a] = query(members[t], a) - centroids(c, a);
-             },
-             query_labels, centroids, support, reference, stage, normals);
+  normals_at(query.rows(), &query, relative_to_centroid(query, centroids), query_labels, centroids, support,
+             reference, stage, normals);
   return normals;
 }
 
