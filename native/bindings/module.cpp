@@ -71,11 +71,18 @@ struct PythonProgress {
     if (callable.is_none()) return;
     callback = [this](double fraction) -> bool {
       py::gil_scoped_acquire gil;
+      py::object r;
       try {
-        py::object r = callable(fraction);
-        return r.is_none() || r.cast<bool>();
+        r = callable(fraction);
       } catch (py::error_already_set& e) {
         e.restore();
+        return false;
+      }
+      if (r.is_none()) return true;
+      try {
+        return r.cast<bool>();
+      } catch (const py::cast_error&) {  // a string, a list...: a ValueError, not pybind's cast error
+        PyErr_Format(PyExc_ValueError, "progress must return True, False or None, got a %s", Py_TYPE(r.ptr())->tp_name);
         return false;
       }
     };
@@ -147,45 +154,77 @@ py::dict model_arrays(const MultiscaleModel& m) {
   return d;
 }
 
+// Every array of a saved model is checked here before the core sees it, so that a damaged or
+// hand-made file raises ValueError (std::invalid_argument) instead of reading out of bounds or
+// giving NaN. The pointscale package checks the same and more first (multiscale.py).
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("not a valid decomposition: " + what);
+}
+
+template <class Matrix>
+bool all_finite(const Matrix& m) {
+  return m.allFinite();
+}
+
+py::object item(const py::dict& d, const std::string& key) {
+  require(d.contains(key.c_str()), "missing array " + key);
+  return d[key.c_str()];
+}
+
 MultiscaleModel model_from_arrays(const py::dict& d) {
   MultiscaleModel m;
-  m.base = to_points(d["base"].cast<DoubleArray>());
+  m.base = to_points(item(d, "base").cast<DoubleArray>());
   const Eigen::Index n = m.base.rows();
-  auto details = d["details"].cast<DoubleArray>();
+  require(n >= 1, "base has no points");
+  require(all_finite(m.base), "base holds NaN or infinite values");
+  auto details = item(d, "details").cast<DoubleArray>();
   if (details.ndim() != 2 || details.shape(1) != n) throw std::invalid_argument("details must be (k, n)");
+  require(details.shape(0) >= 1, "details has no bands (at least 1 is needed)");
+  require(details.shape(0) <= 1024, "details has more than 1024 bands");
   const int k = static_cast<int>(details.shape(0));
   m.details.resize(k, n);
   for (int l = 0; l < k; ++l)
     for (Eigen::Index i = 0; i < n; ++i) m.details(l, i) = details.at(l, i);
-  m.base_normals = to_points(d["base_normals"].cast<DoubleArray>());
-  auto labels = d["labels"].cast<IndexArray>();
+  require(all_finite(m.details), "details holds NaN or infinite values");
+  m.base_normals = to_points(item(d, "base_normals").cast<DoubleArray>());
+  require(m.base_normals.rows() == n, "base_normals must have the " + std::to_string(n) + " rows of base, got " +
+                                          std::to_string(m.base_normals.rows()));
+  require(all_finite(m.base_normals), "base_normals holds NaN or infinite values");
+  auto labels = item(d, "labels").cast<IndexArray>();
   if (labels.ndim() != 2 || labels.shape(0) != k || labels.shape(1) != n) throw std::invalid_argument("labels must be (k, n)");
   m.support.resize(k);
   m.reports.resize(k);
   for (int l = 0; l < k; ++l) {
     const std::string s = std::to_string(l);
     LevelSupport& sup = m.support[l];
-    auto nb = d[("neighborhoods_" + s).c_str()].cast<IndexArray>();
-    auto h = d[("kernel_" + s).c_str()].cast<DoubleArray>();
+    auto nb = item(d, "neighborhoods_" + s).cast<IndexArray>();
+    auto h = item(d, "kernel_" + s).cast<DoubleArray>();
     if (nb.ndim() != 2 || h.ndim() != 1 || h.shape(0) != nb.shape(0)) throw std::invalid_argument("inconsistent support arrays at level " + s);
+    require(nb.shape(0) >= 1 && nb.shape(1) >= 1, "level " + s + " has no clusters or no neighbours");
     sup.clusters = static_cast<Index>(nb.shape(0));
     sup.neighbors = static_cast<int>(nb.shape(1));
     sup.neighborhoods.assign(nb.data(), nb.data() + nb.size());
     sup.labels.assign(labels.data(l, 0), labels.data(l, 0) + n);
     sup.h = Eigen::Map<const Eigen::VectorXd>(h.data(), h.shape(0));
-    auto an = d[("anchors_" + s).c_str()].cast<IndexArray>();
+    require(all_finite(sup.h) && (sup.h.array() > 0.0).all(), "kernel widths must be finite and > 0 at level " + s);
+    auto an = item(d, "anchors_" + s).cast<IndexArray>();
     if (an.ndim() != 1 || an.shape(0) != sup.clusters) throw std::invalid_argument("anchors must be (clusters,) at level " + s);
     sup.anchors.assign(an.data(), an.data() + an.size());
     for (Index v : sup.anchors) if (v < 0 || v >= n) throw std::invalid_argument("anchor out of range at level " + s);
-    auto fr = d[("frames_" + s).c_str()].cast<IndexArray>();
+    auto fr = item(d, "frames_" + s).cast<IndexArray>();
     if (fr.ndim() != 2 || fr.shape(0) != sup.clusters || fr.shape(1) != 2) throw std::invalid_argument("frames must be (clusters, 2) at level " + s);
     sup.frames.assign(fr.data(), fr.data() + fr.size());
     for (Index v : sup.frames) if (v < 0 || v >= sup.clusters) throw std::invalid_argument("frame out of range at level " + s);
     for (Index v : sup.labels) if (v < 0 || v >= sup.clusters) throw std::invalid_argument("label out of range at level " + s);
     for (Index v : sup.neighborhoods) if (v < 0 || v >= sup.clusters) throw std::invalid_argument("neighbourhood out of range at level " + s);
+    // Each cluster's anchor is one of its members, so no cluster is empty.
+    for (Index c = 0; c < sup.clusters; ++c)
+      require(sup.labels[static_cast<std::size_t>(sup.anchors[static_cast<std::size_t>(c)])] == c,
+              "the anchor of cluster " + std::to_string(c) + " is not in that cluster at level " + s);
     // Saved in point order; the core keeps them in cluster order (level_support.h).
-    const Points local = to_points(d[("local_" + s).c_str()].cast<DoubleArray>());
+    const Points local = to_points(item(d, "local_" + s).cast<DoubleArray>());
     if (local.rows() != n) throw std::invalid_argument("local coordinates must be (n, 3) at level " + s);
+    require(all_finite(local), "local coordinates hold NaN or infinite values at level " + s);
     local_from_points(local, sup);
   }
   return m;
@@ -226,10 +265,14 @@ PYBIND11_MODULE(_core, m) {
       .def("reconstruct", [](const MultiscaleModel& s, const DoubleArray& gains, py::object base, bool keep_levels,
                              int upto, py::object progress, py::object origin, py::object buffers) {
         const Eigen::MatrixXd g = to_gains(gains);
+        const Eigen::Index n = s.base.rows();
+        if (s.bands() < 1) throw std::invalid_argument("the model has no bands");
+        if (g.rows() != s.bands() || (g.cols() != 1 && g.cols() != n)) throw std::invalid_argument("gains must be (k,) or (k, n)");
         Points edited;
         const bool has_base = !base.is_none();
         const Vec3 o = to_origin(origin);
         if (has_base) edited = to_points_centred(base.cast<DoubleArray>(), o);
+        if (has_base && edited.rows() != n) throw std::invalid_argument("base must be (n, 3)");
         PythonProgress p(progress);
         ReconstructionBuffers* kept = buffers.is_none() ? nullptr : buffers.cast<ReconstructionBuffers*>();
         Reconstruction r = without_gil([&] {
@@ -262,6 +305,7 @@ PYBIND11_MODULE(_core, m) {
   // the arguments, these checks only keep a wrong call from reading out of bounds.
   py::class_<Reconstructor>(m, "Reconstructor")
       .def(py::init([](const MultiscaleModel& model) {
+        if (model.bands() < 1) throw std::invalid_argument("the model has no bands");
         return without_gil([&] { return std::make_unique<Reconstructor>(model); });
       }))
       .def("reconstruct", [](Reconstructor& r, const DoubleArray& gains, py::object base, py::object progress,

@@ -44,11 +44,18 @@ struct PythonProgress {
     if (callable.is_none()) return;
     callback = [this](double fraction) -> bool {
       py::gil_scoped_acquire gil;
+      py::object r;
       try {
-        py::object r = callable(fraction);
-        return r.is_none() || r.cast<bool>();
+        r = callable(fraction);
       } catch (py::error_already_set& e) {
         e.restore();
+        return false;
+      }
+      if (r.is_none()) return true;
+      try {
+        return r.cast<bool>();
+      } catch (const py::cast_error&) {  // a string, a list...: a ValueError, not pybind's cast error
+        PyErr_Format(PyExc_ValueError, "progress must return True, False or None, got a %s", Py_TYPE(r.ptr())->tp_name);
         return false;
       }
     };

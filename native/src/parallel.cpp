@@ -5,6 +5,8 @@
 #include <chrono>
 #include <exception>
 #include <mutex>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -54,8 +56,19 @@ void parallel_for(std::size_t n, const std::function<void(std::size_t, std::size
 
   std::vector<std::thread> workers;
   workers.reserve(n_threads - 1);
-  for (int t = 1; t < n_threads; ++t)
-    workers.emplace_back([&] { while (work_one()) {} });
+  // A thread that fails to start (std::system_error when the process is out of threads or
+  // address space) must not unwind past the joinable ones: that calls std::terminate. Stop the
+  // started workers, join them, and report the failure to the caller instead.
+  try {
+    for (int t = 1; t < n_threads; ++t)
+      workers.emplace_back([&] { while (work_one()) {} });
+  } catch (const std::exception& e) {
+    stop = true;
+    for (auto& w : workers) w.join();
+    throw std::runtime_error("could not start worker thread " + std::to_string(workers.size() + 1) + " of " +
+                             std::to_string(n_threads - 1) + " (" + e.what() +
+                             "); the work was stopped: ask for fewer threads");
+  }
 
   // The calling thread works and is the only one that talks to the progress callback.
   auto last = std::chrono::steady_clock::now();

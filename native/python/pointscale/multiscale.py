@@ -4,12 +4,15 @@ from __future__ import annotations
 import json
 import os
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from . import _core
-from ._checks import as_callback, as_points, centre, positive, require_surface
+from ._checks import (MAX_COORDINATE, MAX_EXTENT, MAX_GAIN, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS,
+                      as_callback, as_points, centre, finite_result, kernel_option, positive, require_near,
+                      require_surface, set_threads)
 
 #: The coarsest level keeps gamma**(levels-1) * n points; fewer than this cannot carry a surface.
 MIN_COARSE_POINTS = 8
@@ -66,6 +69,8 @@ class Decomposition:
         if "levels" not in self._cache:
             # The core adds the origin in place (a NumPy sum would allocate every level again).
             levels, normals = self._model.reconstruct(np.ones(self.n_bands), None, True, -1, None, self.origin)
+            for level in levels:
+                finite_result(level, "a level of this decomposition")
             self._cache["levels"] = list(levels)
             self._cache["normals"] = list(normals)
         return self._cache["levels"], self._cache["normals"]
@@ -88,16 +93,12 @@ class Decomposition:
 
     @classmethod
     def from_dict(cls, arrays) -> "Decomposition":
-        try:
-            version = int(np.asarray(arrays["format_version"])[0])
-            if version != _FORMAT_VERSION:
-                raise ValueError(f"unsupported decomposition format version {version}")
-            settings = json.loads(bytes(np.asarray(arrays["settings"], dtype=np.uint8)).decode())
-            core_arrays = {k: np.asarray(v) for k, v in arrays.items() if k not in ("origin", "settings", "format_version")}
-            model = _core.Model.from_arrays(core_arrays)
-        except KeyError as exc:
-            raise ValueError(f"not a pointscale decomposition: missing {exc}") from None
-        return cls(model, np.asarray(arrays["origin"], dtype=np.float64).reshape(3), settings)
+        """Rebuilds a decomposition from to_dict()'s arrays. Every array is checked first (keys,
+        dtypes, shapes against n and the band count, index ranges, finiteness, the settings);
+        anything wrong raises one ValueError saying what."""
+        core_arrays, origin, settings = _checked_arrays(arrays)
+        model = _core.Model.from_arrays(core_arrays)  # checks the structure again, for C++ callers
+        return cls(model, origin, settings)
 
     def save(self, path) -> None:
         """Writes one .npz file."""
@@ -108,13 +109,123 @@ class Decomposition:
 
 
 def load(path) -> Decomposition:
-    """Reads a file written by Decomposition.save."""
+    """Reads a file written by Decomposition.save. A file that cannot be read, or whose arrays
+    do not make a decomposition, raises ValueError."""
     try:
         with np.load(os.fspath(path), allow_pickle=False) as f:
+            if not hasattr(f, "files"):
+                raise ValueError("it holds one array, not the arrays of a decomposition (.npz)")
             arrays = dict(f)
-    except (OSError, EOFError, ValueError) as exc:
-        raise ValueError(f"cannot read decomposition {path!s}: {exc}") from None
+    except MemoryError:
+        raise
+    except Exception as exc:  # BadZipFile, zlib.error, EOFError, KeyError from a damaged archive...
+        detail = " ".join(str(exc).split()) or type(exc).__name__
+        raise ValueError(f"cannot read decomposition {path!s}: {detail}") from None
     return Decomposition.from_dict(arrays)
+
+
+def _bad(what: str):
+    return ValueError(f"not a valid decomposition: {what}")
+
+
+def _checked_arrays(arrays):
+    """The arrays of a saved decomposition, checked and converted for _core.Model.from_arrays:
+    (core arrays, origin, settings). Raises ValueError on the first thing wrong."""
+    if not isinstance(arrays, Mapping):
+        raise _bad(f"expected a dict of arrays, got {type(arrays).__name__}")
+
+    def get(key):
+        if key not in arrays:
+            raise ValueError(f"not a pointscale decomposition: missing {key!r}")
+        try:
+            return np.asarray(arrays[key])
+        except Exception as exc:
+            raise _bad(f"{key} is not an array ({exc})") from None
+
+    def floats(key, shape, limit=MAX_EXTENT):
+        a = get(key)
+        if a.dtype.kind != "f":
+            raise _bad(f"{key} must hold floating-point numbers, got dtype {a.dtype}")
+        if a.shape != shape:
+            raise _bad(f"{key} must have shape {shape}, got {a.shape}")
+        a = np.ascontiguousarray(a, dtype=np.float64)
+        if not np.isfinite(a).all():
+            raise _bad(f"{key} holds NaN or infinite values")
+        if a.size and np.abs(a).max() > limit:
+            raise _bad(f"{key} holds values beyond +-{limit:.0e}")
+        return a
+
+    def indices(key, shape, count, what):
+        a = get(key)
+        if a.dtype.kind not in "iu":
+            raise _bad(f"{key} must hold integers, got dtype {a.dtype}")
+        if a.shape != shape:
+            raise _bad(f"{key} must have shape {shape}, got {a.shape}")
+        if a.size and (a.min() < 0 or a.max() >= count):
+            raise _bad(f"{key} must hold indices of {what} in [0, {count - 1}], got [{a.min()}, {a.max()}]")
+        return np.ascontiguousarray(a, dtype=np.int32)
+
+    version = get("format_version")
+    if version.dtype.kind not in "iu" or version.size != 1:
+        raise _bad(f"format_version must be one integer, got {version.dtype} {version.shape}")
+    if int(version.reshape(-1)[0]) != _FORMAT_VERSION:
+        raise ValueError(f"unsupported decomposition format version {int(version.reshape(-1)[0])}")
+    raw = get("settings")
+    if raw.dtype != np.uint8 or raw.ndim != 1:
+        raise _bad(f"settings must be (m,) uint8 (JSON text), got {raw.dtype} {raw.shape}")
+    try:
+        settings = json.loads(raw.tobytes().decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise _bad(f"settings are not valid JSON ({exc})") from None
+    if not isinstance(settings, dict):
+        raise _bad(f"settings must be a JSON object, got {type(settings).__name__}")
+    origin = floats("origin", (3,), MAX_COORDINATE)
+
+    base = get("base")
+    if base.ndim != 2 or base.shape[1:] != (3,) or base.shape[0] < 1:
+        raise _bad(f"base must have shape (n, 3) with n >= 1, got {base.shape}")
+    n = base.shape[0]
+    out = {"base": floats("base", (n, 3))}
+    details = get("details")
+    if details.ndim != 2 or details.shape[1:] != (n,):
+        raise _bad(f"details must have shape (k, {n}), got {details.shape}")
+    k = details.shape[0]
+    if not 1 <= k < MAX_LEVELS:
+        raise _bad(f"details has {k} bands; 1 to {MAX_LEVELS - 1} are supported")
+    out["details"] = floats("details", (k, n))
+    normals = floats("base_normals", (n, 3))
+    if (np.einsum("ij,ij->i", normals, normals) > 1.0 + 1e-6).any():
+        raise _bad("base_normals must be unit vectors")
+    out["base_normals"] = normals
+    labels = get("labels")
+    if labels.shape != (k, n):
+        raise _bad(f"labels must have shape ({k}, {n}), got {labels.shape}")
+    label_rows = []
+    for l in range(k):
+        nb = get(f"neighborhoods_{l}")
+        if nb.ndim != 2 or nb.shape[0] < 1 or not 1 <= nb.shape[1] <= MAX_NEIGHBORS:
+            raise _bad(f"neighborhoods_{l} must have shape (clusters >= 1, 1..{MAX_NEIGHBORS}), got {nb.shape}")
+        c = nb.shape[0]
+        out[f"neighborhoods_{l}"] = indices(f"neighborhoods_{l}", nb.shape, c, "clusters")
+        h = floats(f"kernel_{l}", (c,), 1e100)
+        if not (h >= 1e-100).all():
+            raise _bad(f"kernel_{l} must hold kernel widths in [1e-100, 1e100]")
+        out[f"kernel_{l}"] = h
+        anchors = indices(f"anchors_{l}", (c,), n, "points")
+        out[f"anchors_{l}"] = anchors
+        out[f"frames_{l}"] = indices(f"frames_{l}", (c, 2), c, "clusters")
+        row = labels[l]
+        if row.dtype.kind not in "iu":
+            raise _bad(f"labels must hold integers, got dtype {row.dtype}")
+        if row.min() < 0 or row.max() >= c:
+            raise _bad(f"labels of level {l} must be clusters in [0, {c - 1}], got [{row.min()}, {row.max()}]")
+        row = row.astype(np.int32)
+        if not (row[anchors] == np.arange(c)).all():
+            raise _bad(f"anchors_{l} must each be a member of its own cluster")
+        label_rows.append(row)
+        out[f"local_{l}"] = floats(f"local_{l}", (n, 3))
+    out["labels"] = np.ascontiguousarray(np.stack(label_rows))
+    return out, origin, settings
 
 
 def _level_index(l, count: int) -> int:
@@ -126,12 +237,42 @@ def _level_index(l, count: int) -> int:
 def coarse_base_warning(n: int, levels: int = 4, decimation: float = 0.25) -> str | None:
     """The warning `decompose` gives when level 0 would keep too few support points, or None.
     Callers that run decompose on a worker thread can show it without catching warnings."""
+    n = positive(n, "n", integer=True)
+    levels = positive(levels, "levels", integer=True, minimum=2, maximum=MAX_LEVELS)
+    decimation = _decimation_option(decimation)
     coarse = int(np.floor(decimation ** (levels - 1) * n))
     if coarse >= FEW_COARSE_POINTS:
         return None
     return (f"levels={levels} and decimation={decimation} leave {coarse} support points at level 0 of {n}; "
             f"a base this coarse can be distorted. Use fewer levels or a larger decimation "
             f"(at least {FEW_COARSE_POINTS} is safe).")
+
+
+def _decimation_option(decimation) -> float:
+    decimation = positive(decimation, "decimation")
+    if decimation >= 1.0:
+        raise ValueError(f"decimation must be in (0, 1), got {decimation}")
+    return decimation
+
+
+def _points_needed(levels: int, decimation: float, what: str) -> int:
+    """The fewest input points that leave MIN_COARSE_POINTS at the coarsest level."""
+    fraction = decimation ** (levels - 1)
+    if fraction * 2.0 ** 31 < MIN_COARSE_POINTS:
+        raise ValueError(f"{what} with levels={levels} and decimation={decimation} would need more than 2^31 "
+                         f"points (the coarsest level keeps decimation**(levels-1) of them and needs "
+                         f"{MIN_COARSE_POINTS}); use fewer levels or a larger decimation")
+    return int(np.ceil(MIN_COARSE_POINTS / fraction))
+
+
+def _require_round_trip(dec: "Decomposition", points: np.ndarray, why: str) -> None:
+    """Refuses a decomposition that does not give its input back (a collapsed or inflated base)."""
+    back = dec._model.reconstruct(np.ones(dec.n_bands), None, False, -1, None, dec.origin, None)
+    scale = max(float(np.abs(points - dec.origin).max()), np.finfo(float).tiny)
+    error = float(np.abs(back - points).max()) if np.isfinite(back).all() else np.inf
+    if not error <= 1e-6 * scale:
+        raise ValueError(f"the decomposition does not give its input back (off by {error:.3g}, the input spans "
+                         f"{2 * scale:.3g}): {why}")
 
 
 def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: float = 1.0, normals=None,
@@ -169,18 +310,16 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     diffusion = None
     if smoother == "diffusion":
         diffusion = operators._diffusion_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
-    levels = positive(levels, "levels", integer=True)
+    levels = positive(levels, "levels", integer=True, maximum=MAX_LEVELS)
     if levels < 2:
         raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
-    decimation = positive(decimation, "decimation")
-    if decimation >= 1.0:
-        raise ValueError(f"decimation must be in (0, 1), got {decimation}")
-    kernel = positive(kernel, "kernel")
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4)
+    decimation = _decimation_option(decimation)
+    kernel = kernel_option(kernel)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
     tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True)
+    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
     max_variation = positive(max_variation, "max_variation")
-    need = int(np.ceil(MIN_COARSE_POINTS / decimation ** (levels - 1)))
+    need = _points_needed(levels, decimation, "decompose")
     p = as_points(points)
     if len(p) < need:
         raise ValueError(f"decompose needs at least {need} points for levels={levels} and decimation={decimation} "
@@ -202,10 +341,20 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
                     smoother=smoother, encoding=encoding)
     if diffusion is not None:
         settings["diffusion"] = dict(zip(("neighbors", "lam", "mu", "iterations"), diffusion))
-    _core.set_threads(int(threads))
+    set_threads(threads)
     model = _core.decompose(p, origin, n_arr, levels, decimation, kernel, neighbors, tolerance,
                             max_iterations, max_variation, diffusion, progress)
-    return Decomposition(model, origin, settings)
+    dec = Decomposition(model, origin, settings)
+    _require_finite_model(dec)
+    if diffusion is not None:
+        _require_round_trip(dec, p, f"diffusion_iterations={diffusion[3]} smoothed the support too far; "
+                                    "use fewer iterations")
+    return dec
+
+
+def _require_finite_model(dec: "Decomposition") -> None:
+    finite_result(dec._model.base, "the decomposition's base")
+    finite_result(dec._model.details, "the decomposition's detail")
 
 
 def _check_decomposition(dec) -> None:
@@ -225,6 +374,8 @@ def _gains_array(dec: Decomposition, gains) -> np.ndarray:
         raise ValueError(f"gains must have shape ({k},) per band or ({k}, {n}) per point, got {g.shape}")
     if not np.isfinite(g).all():
         raise ValueError("gains contain NaN or infinite values")
+    if g.size and np.abs(g).max() > MAX_GAIN:
+        raise ValueError(f"gains must be within +-{MAX_GAIN:.0e}, got {np.abs(g).max():.3g}")
     return np.ascontiguousarray(g)
 
 
@@ -235,6 +386,7 @@ def _base_array(dec: Decomposition, base):
     b = as_points(base, "base")
     if b.shape[0] != dec.n_points:
         raise ValueError(f"base must have the decomposition's {dec.n_points} points, got {b.shape[0]}")
+    require_near(b, dec.origin, "base", "the decomposition")
     return b
 
 
@@ -250,7 +402,8 @@ def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None) -> 
     _check_decomposition(dec)
     g = _gains_array(dec, gains)
     b = _base_array(dec, base)
-    return dec._model.reconstruct(g, b, False, -1, as_callback(progress), dec.origin, dec._buffers)
+    out = dec._model.reconstruct(g, b, False, -1, as_callback(progress), dec.origin, dec._buffers)
+    return finite_result(out, "the reconstruction")
 
 
 class Reconstructor:
@@ -271,14 +424,15 @@ class Reconstructor:
         """As pointscale.reconstruct(dec, gains, base): the finest level, (n, 3)."""
         g = _gains_array(self._dec, gains)
         b = _base_array(self._dec, base)
-        return self._core.reconstruct(g, b, as_callback(progress), self._dec.origin)
+        return finite_result(self._core.reconstruct(g, b, as_callback(progress), self._dec.origin),
+                             "the reconstruction")
 
 
 def reconstruct_levels(dec: Decomposition, gains=None, base=None) -> np.ndarray:
     """Every level P^0..P^k rebuilt like reconstruct(): (k+1, n, 3)."""
     _check_decomposition(dec)
     levels, _ = dec._model.reconstruct(_gains_array(dec, gains), _base_array(dec, base), True, -1, None, dec.origin)
-    return np.stack(levels)
+    return finite_result(np.stack(levels), "the reconstruction")
 
 
 def blend(dec: Decomposition, t: float) -> np.ndarray:

@@ -9,8 +9,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _core
-from ._checks import as_callback, as_points, centre, positive, require_surface
-from .multiscale import MIN_COARSE_POINTS, Decomposition
+from ._checks import (MAX_DIFFUSION_ITERATIONS, MAX_GAIN, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS, as_callback,
+                      as_points, centre, finite_result, kernel_option, positive, require_extent, require_near,
+                      require_stable_diffusion, require_surface, set_threads)
+from .multiscale import (MIN_COARSE_POINTS, Decomposition, _decimation_option, _points_needed,
+                         _require_finite_model, _require_round_trip)
 
 
 def _diffusion_settings(lam, mu, taubin, neighbors):
@@ -18,11 +21,13 @@ def _diffusion_settings(lam, mu, taubin, neighbors):
     lam = positive(lam, "lam")
     if lam > 1.0:
         raise ValueError(f"lam must be in (0, 1] for a stable explicit step, got {lam}")
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3, maximum=MAX_NEIGHBORS)
     if mu is None:
         mu = _core.taubin_mu(lam, 0.1) if taubin else 0.0
     else:
         try:
+            if isinstance(mu, (bool, np.bool_)):
+                raise TypeError
             mu = float(mu)
         except (TypeError, ValueError):
             raise ValueError(f"mu must be a number below -lam, got {mu!r}") from None
@@ -34,7 +39,9 @@ def _diffusion_settings(lam, mu, taubin, neighbors):
 def _diffusion_options(iterations, lam, taubin, neighbors) -> tuple:
     """The core's (neighbors, lam, mu, iterations) for the "diffusion" smoother of a decomposition."""
     k, lam, mu = _diffusion_settings(lam, None, taubin, neighbors)
-    return (k, lam, mu, positive(iterations, "diffusion_iterations", integer=True))
+    iterations = positive(iterations, "diffusion_iterations", integer=True, maximum=MAX_DIFFUSION_ITERATIONS)
+    require_stable_diffusion(lam, mu, iterations, "diffusion_iterations")
+    return (k, lam, mu, iterations)
 
 
 def smooth_diffusion(points, iterations: int = 10, *, lam: float = 0.5, taubin: bool = False, mu=None,
@@ -51,12 +58,15 @@ def smooth_diffusion(points, iterations: int = 10, *, lam: float = 0.5, taubin: 
     neighbors   k, the point itself included
     Returns the smoothed (n, 3) points, indexed like the input.
     """
-    iterations = positive(iterations, "iterations", integer=True)
+    iterations = positive(iterations, "iterations", integer=True, maximum=MAX_DIFFUSION_ITERATIONS)
     neighbors, lam, mu = _diffusion_settings(lam, mu, taubin, neighbors)
+    require_stable_diffusion(lam, mu, iterations)
     p = as_points(points, min_count=neighbors)
+    require_extent(p, minimum=False)
     origin = centre(p)
-    _core.set_threads(int(threads))
-    return _core.diffuse(p - origin, neighbors, lam, mu, iterations, as_callback(progress)) + origin
+    set_threads(threads)
+    out = _core.diffuse(p - origin, neighbors, lam, mu, iterations, as_callback(progress)) + origin
+    return finite_result(out, "the smoothed points")
 
 
 def diffusion_levels(points, levels: int = 4, *, iterations: int = 10, growth: float = 4.0, lam: float = 0.5,
@@ -66,20 +76,28 @@ def diffusion_levels(points, levels: int = 4, *, iterations: int = 10, growth: f
     Level l-1 is level l smoothed by iterations * growth**(k-l) more steps, so the diffusion time
     grows geometrically towards the coarse levels, like the kernel widths of decompose().
     """
-    levels = positive(levels, "levels", integer=True, minimum=2)
-    iterations = positive(iterations, "iterations", integer=True)
-    growth = positive(growth, "growth", minimum=1.0)
+    levels = positive(levels, "levels", integer=True, minimum=2, maximum=MAX_LEVELS)
+    iterations = positive(iterations, "iterations", integer=True, maximum=MAX_DIFFUSION_ITERATIONS)
+    growth = positive(growth, "growth", minimum=1.0, maximum=1e3)
     neighbors, lam, mu = _diffusion_settings(lam, mu, taubin, neighbors)
+    # The steps per level grow geometrically: bound their sum, like smooth_diffusion's iterations.
+    total = sum(float(np.round(iterations * growth ** step)) for step in range(levels - 1))
+    if total > MAX_DIFFUSION_ITERATIONS:
+        raise ValueError(f"levels={levels}, iterations={iterations} and growth={growth:g} take {total:.3g} diffusion "
+                         f"steps in all; at most {MAX_DIFFUSION_ITERATIONS} are allowed (use fewer levels, "
+                         "iterations or a smaller growth)")
+    require_stable_diffusion(lam, mu, int(total), "the total of iterations over the levels")
     p = as_points(points, min_count=neighbors)
+    require_extent(p, minimum=False)
     origin = centre(p)
-    _core.set_threads(int(threads))
+    set_threads(threads)
     out = [p - origin]
     for step in range(levels - 1):
         steps = int(round(iterations * growth ** step))
         out.append(_core.diffuse(out[-1], neighbors, lam, mu, steps, None))
     levels_out = np.stack(out[::-1]) + origin
     levels_out[-1] = p  # the input itself, without a centring round trip
-    return levels_out
+    return finite_result(levels_out, "the diffusion levels")
 
 
 def project_sheets(points, onto, *, kernel: float = 1.0, sheet: float = 0.2, onto_normals=None,
@@ -94,15 +112,16 @@ def project_sheets(points, onto, *, kernel: float = 1.0, sheet: float = 0.2, ont
     Returns (positions, normals) and, with return_report, a dict like project().
     """
     x = as_points(points)
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3, maximum=MAX_NEIGHBORS)
     s = as_points(onto, "onto", min_count=3)
     require_surface(s, "onto", allow_planar=True)
-    kernel = positive(kernel, "kernel")
-    sheet = positive(sheet, "sheet")
+    require_near(x, centre(s), "points", "onto")
+    kernel = kernel_option(kernel)
+    sheet = positive(sheet, "sheet", minimum=1e-3)
     if sheet > 1.0:
-        raise ValueError(f"sheet must be in (0, 1] (a fraction of the kernel width), got {sheet}")
+        raise ValueError(f"sheet must be in [0.001, 1] (a fraction of the kernel width), got {sheet}")
     tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True)
+    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
     nrm = None
     if onto_normals is not None:
         nrm = as_points(onto_normals, "onto_normals")
@@ -111,11 +130,14 @@ def project_sheets(points, onto, *, kernel: float = 1.0, sheet: float = 0.2, ont
         if not (np.linalg.norm(nrm, axis=1) > 0).all():
             raise ValueError("onto_normals contains zero vectors")
         nrm = nrm / np.linalg.norm(nrm, axis=1)[:, None]
+        if not np.isfinite(nrm).all():
+            raise ValueError("onto_normals has vectors too short to normalise")
     origin = centre(s)
-    _core.set_threads(int(threads))
+    set_threads(threads)
     pos, n, not_converged, degenerate = _core.project_sheets(x - origin, s - origin, nrm, kernel, neighbors,
                                                              tolerance, max_iterations, sheet, as_callback(progress))
-    pos = pos + origin
+    pos = finite_result(pos + origin, "the projection")
+    finite_result(n, "the projection's normals")
     if return_report:
         return pos, n, {"not_converged": int(not_converged), "degenerate": int(degenerate)}
     return pos, n
@@ -137,17 +159,22 @@ def shoot_rays(origins, directions, onto, *, kernel: float = 1.0, neighbors: int
     length = np.linalg.norm(d, axis=1)
     if not (length > 0).all():
         raise ValueError(f"directions contains {int((length == 0).sum())} zero vectors")
+    unit = d / length[:, None]
+    if not (np.isfinite(unit).all() and (np.abs(np.linalg.norm(unit, axis=1) - 1.0) < 1e-6).all()):
+        raise ValueError("directions contains vectors too short to normalise")
     s = as_points(onto, "onto", min_count=3)
     require_surface(s, "onto", allow_planar=True)
-    kernel = positive(kernel, "kernel")
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3)
-    limit = 0.0 if max_distance is None else positive(max_distance, "max_distance")
     origin = centre(s)
-    _core.set_threads(int(threads))
-    hits, dist, missed = _core.shoot_rays(o - origin, d / length[:, None], s - origin, kernel, neighbors,
-                                          positive(tolerance, "tolerance"),
-                                          positive(max_iterations, "max_iterations", integer=True), limit, 0.05)
-    return hits + origin, dist, missed
+    require_near(o, origin, "origins", "onto")
+    kernel = kernel_option(kernel)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3, maximum=MAX_NEIGHBORS)
+    limit = 0.0 if max_distance is None else positive(max_distance, "max_distance")
+    tolerance = positive(tolerance, "tolerance")
+    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
+    set_threads(threads)
+    hits, dist, missed = _core.shoot_rays(o - origin, unit, s - origin, kernel, neighbors, tolerance,
+                                          max_iterations, limit, 0.05)
+    return finite_result(hits + origin, "the ray hits"), finite_result(dist, "the ray distances"), missed
 
 
 def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neighbors: int = 24,
@@ -170,10 +197,11 @@ def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neigh
     p = as_points(points, min_count=MIN_COARSE_POINTS)
     b = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)
     require_surface(b, "base_points", allow_planar=True)
-    kernel = positive(kernel, "kernel")
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4)
+    require_near(p, centre(b), "points", "base_points")
+    kernel = kernel_option(kernel)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
     tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True)
+    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
     max_variation = positive(max_variation, "max_variation")
     bn = None
     if base_normals is not None:
@@ -181,20 +209,23 @@ def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neigh
         if bn.shape != b.shape:
             raise ValueError(f"base_normals must have the shape of base_points {b.shape}, got {bn.shape}")
     origin = centre(np.vstack([p, b]))
-    _core.set_threads(int(threads))
+    set_threads(threads)
     model = _core.encode(p - origin, b - origin, bn, kernel, neighbors, tolerance, max_iterations, max_variation,
                          as_callback(progress))
     settings = dict(levels=2, encoding="base", kernel=kernel, neighbors=neighbors, tolerance=tolerance,
                     max_iterations=max_iterations, max_variation=max_variation, base_points=len(b))
-    return Decomposition(model, origin, settings)
+    dec = Decomposition(model, origin, settings)
+    _require_finite_model(dec)
+    return dec
 
 
 def ellipsoid_base(points_a, points_b=None, n: int = 20000) -> np.ndarray:
     """n samples of the largest axis-aligned ellipsoid inside the common bounding box of the
     models, the base the paper used for Fig. 8 and 9. Returns (n, 3)."""
-    n = positive(n, "n", integer=True, minimum=MIN_COARSE_POINTS)
+    n = positive(n, "n", integer=True, minimum=MIN_COARSE_POINTS, maximum=10 ** 8)
     a = as_points(points_a, "points_a")
     pts = a if points_b is None else np.vstack([a, as_points(points_b, "points_b")])
+    require_extent(pts, "the points", minimum=False)
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     axes = 0.5 * (hi - lo)
     if not (axes > 1e-9 * axes.max()).all():
@@ -222,7 +253,10 @@ class Morph:
             raise ValueError(f"alpha and beta must be numbers, got {alpha!r}, {beta!r}") from None
         if not (np.isfinite(alpha) and np.isfinite(beta)):
             raise ValueError(f"alpha and beta must be finite, got {alpha}, {beta}")
-        return self.base + (alpha * self.detail_a + beta * self.detail_b)[:, None] * self.normals
+        if max(abs(alpha), abs(beta)) > MAX_GAIN:
+            raise ValueError(f"alpha and beta must be within +-{MAX_GAIN:.0e}, got {alpha}, {beta}")
+        out = self.base + (alpha * self.detail_a + beta * self.detail_b)[:, None] * self.normals
+        return finite_result(out, "the morph")
 
 
 def morph(points_a, points_b, base_points, *, base_normals=None, kernel: float = 1.0, neighbors: int = 24,
@@ -239,18 +273,24 @@ def morph(points_a, points_b, base_points, *, base_normals=None, kernel: float =
     b = as_points(points_b, "points_b")
     s = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)
     require_surface(s, "base_points", allow_planar=True)
-    kernel = positive(kernel, "kernel")
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4)
-    k = positive(interpolation_neighbors, "interpolation_neighbors", integer=True)
+    require_near(a, centre(s), "points_a", "base_points")
+    require_near(b, centre(s), "points_b", "base_points")
+    kernel = kernel_option(kernel)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
+    k = positive(interpolation_neighbors, "interpolation_neighbors", integer=True, maximum=MAX_NEIGHBORS)
+    tolerance = positive(tolerance, "tolerance")
+    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
     bn = None
     if base_normals is not None:
         bn = as_points(base_normals, "base_normals")
         if bn.shape != s.shape:
             raise ValueError(f"base_normals must have the shape of base_points {s.shape}, got {bn.shape}")
     origin = centre(np.vstack([a, b, s]))
-    _core.set_threads(int(threads))
-    r = _core.morph(a - origin, b - origin, s - origin, bn, kernel, neighbors, positive(tolerance, "tolerance"),
-                    positive(max_iterations, "max_iterations", integer=True), k, as_callback(progress))
+    set_threads(threads)
+    r = _core.morph(a - origin, b - origin, s - origin, bn, kernel, neighbors, tolerance, max_iterations, k,
+                    as_callback(progress))
+    for key in ("base", "normals", "detail_a", "detail_b"):
+        finite_result(r[key], f"the morph's {key.replace('_', ' ')}")
     return Morph(r["base"] + origin, r["normals"], r["detail_a"], r["detail_b"],
                  {"not_converged": int(r["not_converged"]), "degenerate": int(r["degenerate"])})
 
@@ -277,21 +317,19 @@ def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decima
     """
     if smoother not in ("mls", "diffusion"):
         raise ValueError(f"smoother must be 'mls' or 'diffusion', got {smoother!r}")
-    levels = positive(levels, "levels", integer=True)
+    levels = positive(levels, "levels", integer=True, maximum=MAX_LEVELS)
     if levels < 2:
         raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
-    decimation = positive(decimation, "decimation")
-    if decimation >= 1.0:
-        raise ValueError(f"decimation must be in (0, 1), got {decimation}")
-    kernel = positive(kernel, "kernel")
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4)
+    decimation = _decimation_option(decimation)
+    kernel = kernel_option(kernel)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
     tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True)
+    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
     max_variation = positive(max_variation, "max_variation")
     diffusion = None
     if smoother == "diffusion":
         diffusion = _diffusion_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
-    need = int(np.ceil(MIN_COARSE_POINTS / decimation ** (levels - 1)))
+    need = _points_needed(levels, decimation, "decompose_rayshoot")
     p = as_points(points)
     if len(p) < need:
         raise ValueError(f"decompose_rayshoot needs at least {need} points for levels={levels} and "
@@ -303,9 +341,9 @@ def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decima
         if n_arr.shape != p.shape:
             raise ValueError(f"normals must have the shape of points {p.shape}, got {n_arr.shape}")
     limit = 0.0 if max_distance is None else positive(max_distance, "max_distance")
-    fine_kernel = positive(fine_kernel, "fine_kernel")
+    fine_kernel = kernel_option(fine_kernel, "fine_kernel")
     origin = centre(p)
-    _core.set_threads(int(threads))
+    set_threads(threads)
     model, missed = _core.decompose_rayshoot(p - origin, n_arr, levels, decimation, kernel, neighbors, tolerance,
                                              max_iterations, max_variation, diffusion, limit, fine_kernel,
                                              as_callback(progress))
@@ -313,6 +351,7 @@ def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decima
                     max_iterations=max_iterations, max_variation=max_variation, smoother=smoother,
                     encoding="rayshoot", rays_missed=[int(len(m)) for m in missed])
     dec = Decomposition(model, origin, settings)
+    _require_finite_model(dec)
     dec._cache["rays_missed_points"] = [np.asarray(m) for m in missed]
     return dec
 

@@ -4,7 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from . import _core
-from ._checks import as_callback, as_points, centre, positive, require_surface
+from ._checks import (MAX_ITERATIONS, MAX_NEIGHBORS, as_callback, as_points, centre, finite_result, kernel_option,
+                      positive, require_extent, require_near, require_surface, set_threads)
 
 
 def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance: float = 1e-9,
@@ -25,12 +26,13 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
     Normals are unit and unoriented.
     """
     x = as_points(points)
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3, maximum=MAX_NEIGHBORS)
     s = as_points(onto, "onto", min_count=3)
     require_surface(s, "onto", allow_planar=True)
-    kernel = positive(kernel, "kernel")
+    require_near(x, centre(s), "points", "onto")
+    kernel = kernel_option(kernel)
     tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True)
+    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
     if near is not None:
         near = np.asarray(near)
         if near.shape != (len(x),) or not np.issubdtype(near.dtype, np.integer):
@@ -39,10 +41,11 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
             raise ValueError(f"near must index onto: each in [0, {len(s) - 1}], got [{near.min()}, {near.max()}]")
         near = near.astype(np.int32)
     origin = centre(s)
-    _core.set_threads(int(threads))
+    set_threads(threads)
     pos, nrm, not_converged, degenerate = _core.project(x - origin, s - origin, kernel, neighbors, tolerance,
                                                         max_iterations, as_callback(progress), near)
-    pos = pos + origin
+    pos = finite_result(pos + origin, "the projection")
+    finite_result(nrm, "the projection's normals")
     if return_report:
         return pos, nrm, {"not_converged": int(not_converged), "degenerate": int(degenerate)}
     return pos, nrm
@@ -58,16 +61,18 @@ def decimate(points, target: int, *, max_variation: float = 0.05):
     target = positive(target, "target", integer=True)
     if target > len(p):
         raise ValueError(f"target ({target}) exceeds the number of points ({len(p)})")
+    max_variation = positive(max_variation, "max_variation")
+    require_extent(p, minimum=False)
     origin = centre(p)
-    c, labels = _core.decimate(p - origin, target, positive(max_variation, "max_variation"))
-    return c + origin, labels
+    c, labels = _core.decimate(p - origin, target, max_variation)
+    return finite_result(c + origin, "the centroids"), labels
 
 
 def estimate_normals(points, neighbors: int = 16, *, orient: bool = True, threads: int = 0) -> np.ndarray:
     """Unit PCA normals of each point's neighbourhood, consistently oriented (outward on closed
     shapes) by spanning-tree propagation when orient is True. Returns (n, 3)."""
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3, maximum=MAX_NEIGHBORS)
     p = as_points(points, min_count=neighbors)
     require_surface(p, allow_planar=True)
-    _core.set_threads(int(threads))
-    return _core.estimate_normals(p - centre(p), neighbors, bool(orient))
+    set_threads(threads)
+    return finite_result(_core.estimate_normals(p - centre(p), neighbors, bool(orient)), "the normals")
