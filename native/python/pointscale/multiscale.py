@@ -33,6 +33,9 @@ class Decomposition:
     origin: np.ndarray
     settings: dict
     _cache: dict = field(default_factory=dict, repr=False)
+    # The decomposition's per-level report, kept from the run that made it: a loaded model has
+    # no reports of its own, so load() restores them from the file.
+    _stats: list | None = field(default=None, repr=False, compare=False)
     # reconstruct()'s working arrays, kept between calls: two (n, 3) arrays, 48 bytes per point,
     # which at 100k points saves 2-3 ms a call of faulting fresh pages in.
     _buffers: object = field(default_factory=_core.ReconstructionBuffers, repr=False, compare=False)
@@ -63,7 +66,7 @@ class Decomposition:
     @property
     def stats(self) -> list[dict]:
         """Per level (0 first): support points, kernel width, projections that did not converge."""
-        return self._model.reports
+        return self._stats if self._stats is not None else self._model.reports
 
     def _levels(self):
         if "levels" not in self._cache:
@@ -88,6 +91,7 @@ class Decomposition:
         arrays = dict(self._model.to_arrays())
         arrays["origin"] = np.asarray(self.origin, dtype=np.float64)
         arrays["settings"] = np.frombuffer(json.dumps(self.settings).encode(), dtype=np.uint8)
+        arrays["stats"] = np.frombuffer(json.dumps(self.stats).encode(), dtype=np.uint8)
         arrays["format_version"] = np.array([_FORMAT_VERSION])
         return arrays
 
@@ -98,7 +102,7 @@ class Decomposition:
         anything wrong raises one ValueError saying what."""
         core_arrays, origin, settings = _checked_arrays(arrays)
         model = _core.Model.from_arrays(core_arrays)  # checks the structure again, for C++ callers
-        return cls(model, origin, settings)
+        return cls(model, origin, settings, _stats=_checked_stats(arrays, model.bands))
 
     def save(self, path) -> None:
         """Writes one .npz file."""
@@ -226,6 +230,32 @@ def _checked_arrays(arrays):
         out[f"local_{l}"] = floats(f"local_{l}", (n, 3))
     out["labels"] = np.ascontiguousarray(np.stack(label_rows))
     return out, origin, settings
+
+
+_STATS_KEYS = ("support_points", "kernel_width", "not_converged", "degenerate", "consistency_iterations",
+               "consistency_residual", "pinned")
+
+
+def _checked_stats(arrays, bands: int) -> list | None:
+    """The saved per-level report (JSON), or None for a file saved before reports were kept."""
+    if "stats" not in arrays:
+        return None
+    raw = np.asarray(arrays["stats"])
+    try:
+        if raw.dtype != np.uint8 or raw.ndim != 1:
+            raise ValueError(f"must be (m,) uint8 JSON text, got {raw.dtype} {raw.shape}")
+        stats = json.loads(raw.tobytes().decode("utf-8"))
+        if not isinstance(stats, list) or len(stats) != bands:
+            raise ValueError(f"must list one report per band ({bands})")
+        for report in stats:
+            if not isinstance(report, dict) or set(report) != set(_STATS_KEYS):
+                raise ValueError(f"each report must have exactly the keys {', '.join(_STATS_KEYS)}")
+            for key, value in report.items():
+                if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+                    raise ValueError(f"{key} must be a finite number, got {value!r}")
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise _bad(f"stats {exc}") from None
+    return stats
 
 
 def _level_index(l, count: int) -> int:
