@@ -1,12 +1,18 @@
-"""The command line and PLY input/output."""
+"""The command line: precision, attributes, formats, safe folders, clear errors, Ctrl-C."""
+import os
+import signal
 import subprocess
 import sys
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
+from plyfile import PlyData, PlyElement
 
 import pointscale as ps
 from helpers import diagonal, shared_model
+from pointscale import cli, io
 from pointscale.io import read_ply, write_ply
 
 
@@ -14,40 +20,296 @@ def run(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "pointscale", *args], capture_output=True, text=True, cwd=cwd)
 
 
-def test_ply_round_trip_keeps_points_normals_and_faces(tmp_path):
-    points = ps.shapes.sphere(500)
-    faces = [[0, 1, 2], [2, 3, 4]]
-    write_ply(tmp_path / "a.ply", points, normals=points, faces=faces, scalars={"detail": points[:, 0]})
-    back = read_ply(tmp_path / "a.ply")
-    assert np.allclose(back.points, points, atol=1e-6) and np.allclose(back.normals, points, atol=1e-6)
-    assert [list(f) for f in back.faces] == faces
+def one_line_error(done) -> str:
+    assert done.returncode == 2, (done.returncode, done.stdout, done.stderr)
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+    return lines[0]
 
 
-def test_decompose_then_reconstruct_from_the_command_line(tmp_path):
-    points = ps.shapes.bumpy_sphere(6000)
-    write_ply(tmp_path / "in.ply", points)
+def ellipsoid_with_bumps(n: int, axes=(1.3, 0.8, 0.6), seed: int = 3) -> np.ndarray:
+    """A shape of this file's own: a bumpy ellipsoid, not the sphere other tests use."""
+    p = ps.shapes.bumpy_sphere(n, coarse=0.05, fine=0.01, fine_frequency=19.0, noise=0.001, seed=seed)
+    return p * np.asarray(axes)
+
+
+def plyfile_scan(path: Path, points: np.ndarray, faces=None, dtype="f8") -> dict:
+    """Writes a PLY through plyfile with colours, a quality scalar, an id, UVs and face colours;
+    returns the attributes written."""
+    n = len(points)
+    rng = np.random.default_rng(5)
+    attrs = {"red": rng.integers(0, 256, n).astype("u1"), "green": rng.integers(0, 256, n).astype("u1"),
+             "blue": rng.integers(0, 256, n).astype("u1"), "alpha": rng.integers(0, 256, n).astype("u1"),
+             "quality": rng.random(n).astype("f4"), "scan_id": rng.integers(0, 7, n).astype("i4"),
+             "s": rng.random(n).astype("f4"), "t": rng.random(n).astype("f4")}
+    vertex = np.empty(n, dtype=[("x", dtype), ("y", dtype), ("z", dtype)] + [(k, v.dtype.str) for k, v in attrs.items()])
+    for a, name in enumerate("xyz"):
+        vertex[name] = points[:, a]
+    for k, v in attrs.items():
+        vertex[k] = v
+    elements = [PlyElement.describe(vertex, "vertex")]
+    if faces is not None:
+        face = np.empty(len(faces), dtype=[("vertex_indices", "i4", (3,)), ("red", "u1"), ("green", "u1"),
+                                           ("blue", "u1")])
+        face["vertex_indices"] = faces
+        for c in ("red", "green", "blue"):
+            face[c] = rng.integers(0, 256, len(faces)).astype("u1")
+            attrs["face_" + c] = face[c].copy()
+        elements.append(PlyElement.describe(face, "face", len_types={"vertex_indices": "u1"}))
+    PlyData(elements).write(str(path))
+    return attrs
+
+
+def test_a_float64_ply_far_from_the_origin_round_trips_through_the_command_line(tmp_path):
+    # UTM-like coordinates: float32 would put every point of this 3-unit shape on one value.
+    points = ellipsoid_with_bumps(7000) + np.array([6.3e6, 1.2e7, 310.0])
+    write_ply(tmp_path / "utm.ply", points)
+    done = run("decompose", str(tmp_path / "utm.ply"), "-o", str(tmp_path / "out"), "--levels", "3")
+    assert done.returncode == 0, done.stderr
+    level = read_ply(tmp_path / "out" / "level_2.ply")
+    assert level.precision == np.float64
+    assert np.abs(level.points - points).max() < 1e-9 * diagonal(points)
+    done = run("reconstruct", str(tmp_path / "out"), "-o", str(tmp_path / "same.ply"))
+    assert done.returncode == 0, done.stderr
+    same = read_ply(tmp_path / "same.ply")
+    assert same.precision == np.float64
+    assert np.abs(same.points - points).max() < 1e-9 * diagonal(points)
+
+
+def test_every_attribute_survives_into_every_level_and_result(tmp_path):
+    points = ellipsoid_with_bumps(6000, axes=(0.7, 1.0, 1.6), seed=8)
+    faces = np.random.default_rng(1).integers(0, len(points), (500, 3))
+    attrs = plyfile_scan(tmp_path / "in.ply", points, faces, dtype="f4")
     done = run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3")
     assert done.returncode == 0, done.stderr
-    assert "2 detail bands" in done.stdout
-    for name in ("decomposition.npz", "level_0.ply", "level_1.ply", "level_2.ply"):
-        assert (tmp_path / "out" / name).exists()
-    done = run("reconstruct", str(tmp_path / "out"), "--gains", "1,1", "-o", str(tmp_path / "same.ply"))
+    dec = ps.load(tmp_path / "out" / "decomposition.npz")
+    done = run("reconstruct", str(tmp_path / "out"), "--gains", "1,2", "-o", str(tmp_path / "boost.ply"))
     assert done.returncode == 0, done.stderr
-    same = read_ply(tmp_path / "same.ply").points
-    assert np.abs(same - points).max() < 1e-5 * diagonal(points)  # float32 file precision
-    done = run("reconstruct", str(tmp_path / "out"), "--gains", "1,0", "-o", str(tmp_path / "smooth.ply"))
-    smooth = read_ply(tmp_path / "smooth.ply").points
-    assert np.abs(smooth - points).max() > 1e-3
+    files = [tmp_path / "out" / f"level_{l}.ply" for l in range(3)] + [tmp_path / "boost.ply"]
+    for f in files:
+        ply = PlyData.read(str(f))
+        v = ply["vertex"].data
+        assert v["x"].dtype == np.float32  # the input's precision
+        for name in ("red", "green", "blue", "alpha", "quality", "scan_id", "s", "t"):
+            assert v[name].dtype == attrs[name].dtype and np.array_equal(v[name], attrs[name]), (f.name, name)
+        fa = ply["face"].data
+        assert np.array_equal(np.stack(fa["vertex_indices"]), faces)
+        for c in ("red", "green", "blue"):
+            assert np.array_equal(fa[c], attrs["face_" + c]), (f.name, c)
+        normals = np.column_stack([v["nx"], v["ny"], v["nz"]]).astype(np.float64)
+        assert np.abs(np.linalg.norm(normals, axis=1) - 1).max() < 1e-6
+    # Levels carry their own normals, not the input's (it had none) nor each other's.
+    for l in range(2):
+        v = PlyData.read(str(files[l]))["vertex"].data
+        got = np.column_stack([v["nx"], v["ny"], v["nz"]])
+        assert np.abs(got - dec.normals(l)).max() < 1e-6
+    finest = read_ply(files[2])
+    outward = np.einsum("ij,ij->i", finest.normals, finest.points / np.array([0.7, 1.0, 1.6]) ** 2) > 0
+    assert outward.mean() > 0.99
+
+
+def test_a_trimesh_file_keeps_its_colours(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    mesh = trimesh.creation.icosphere(subdivisions=5, radius=2.0)
+    mesh.vertices += 0.02 * np.sin(9 * mesh.vertices)
+    colours = np.random.default_rng(2).integers(0, 256, (len(mesh.vertices), 4)).astype(np.uint8)
+    mesh.visual.vertex_colors = colours
+    mesh.export(tmp_path / "ico.ply")
+    done = run("decompose", str(tmp_path / "ico.ply"), "-o", str(tmp_path / "out"), "--levels", "3")
+    assert done.returncode == 0, done.stderr
+    for l in range(3):
+        back = trimesh.load(tmp_path / "out" / f"level_{l}.ply", process=False)
+        assert np.array_equal(np.asarray(back.visual.vertex_colors), colours), l
+        assert np.array_equal(np.asarray(back.faces), np.asarray(mesh.faces))
+
+
+def test_the_bunny_scans_keep_their_scan_id(tmp_path):
+    path = shared_model("bunny_scans.ply")
+    source = PlyData.read(str(path))["vertex"].data["scan_id"]
+    done = run("decompose", str(path), "-o", str(tmp_path / "out"), "--levels", "3")
+    assert done.returncode == 0, done.stderr
+    for l in (0, 2):
+        v = PlyData.read(str(tmp_path / "out" / f"level_{l}.ply"))["vertex"].data
+        assert v["scan_id"].dtype == source.dtype and np.array_equal(v["scan_id"], source)
+
+
+def test_formats_are_chosen_by_extension_in_both_directions(tmp_path):
+    laspy = pytest.importorskip("laspy")
+    points = ellipsoid_with_bumps(6000, axes=(40.0, 25.0, 12.0), seed=4) + np.array([4.5e5, 5.2e6, 100.0])
+    header = laspy.LasHeader(point_format=3, version="1.2")
+    header.scales = np.array([0.001, 0.001, 0.001])
+    header.offsets = np.array([450000.0, 5200000.0, 0.0])
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = points[:, 0], points[:, 1], points[:, 2]
+    las.intensity = np.arange(len(points), dtype=np.uint16)
+    las.classification = np.full(len(points), 2, dtype=np.uint8)
+    las.write(tmp_path / "site.las")
+    done = run("decompose", str(tmp_path / "site.las"), "-o", str(tmp_path / "out"), "--levels", "3")
+    assert done.returncode == 0, done.stderr
+    level = laspy.read(tmp_path / "out" / "level_0.las")
+    assert np.allclose(level.header.scales, 0.001) and np.allclose(level.header.offsets, header.offsets)
+    assert np.array_equal(level.intensity, np.arange(len(points))) and (np.asarray(level.classification) == 2).all()
+    done = run("reconstruct", str(tmp_path / "out"), "-o", str(tmp_path / "same.obj"))
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "same.obj").read_text()[:4000].count("\nv ") > 10  # OBJ text, not PLY bytes
+    done = run("reconstruct", str(tmp_path / "out"), "-o", str(tmp_path / "same.xyz"))
+    assert done.returncode == 0, done.stderr
+    back = io.read(tmp_path / "same.xyz").points
+    las_points = np.column_stack([level.x, level.y, level.z])
+    assert back.shape == points.shape and np.abs(back - points).max() < 1e-3  # the LAS grid of 1 mm
+    assert las_points.shape == points.shape
+    msg = one_line_error(run("reconstruct", str(tmp_path / "out"), "-o", str(tmp_path / "same.dwg")))
+    assert ".dwg" in msg and ".ply" in msg and ".laz" in msg
+
+
+def test_nothing_loads_a_pickle(tmp_path):
+    points = ellipsoid_with_bumps(6000)
+    write_ply(tmp_path / "in.ply", points)
+    assert run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3").returncode == 0
+    marker = tmp_path / "pwned"
+
+    class Payload:
+        def __reduce__(self):
+            return (os.system, (f"touch {marker}",))
+
+    bad = np.empty(1, dtype=object)
+    bad[0] = Payload()
+    np.save(tmp_path / "out" / "faces.npy", bad, allow_pickle=True)
+    (tmp_path / "out" / "source.npz").unlink()
+    msg = one_line_error(run("info", str(tmp_path / "out")))
+    assert "pickle" in msg and not marker.exists()
+    np.savez(tmp_path / "out" / "source.npz", meta_json=bad)
+    msg = one_line_error(run("reconstruct", str(tmp_path / "out"), "-o", str(tmp_path / "r.ply")))
+    assert not marker.exists() and "source.npz" in msg
+
+
+@pytest.mark.parametrize("victim", ["decomposition.npz", "source.npz"])
+def test_a_truncated_folder_file_is_one_clear_line(tmp_path, victim):
+    write_ply(tmp_path / "in.ply", ellipsoid_with_bumps(6000))
+    assert run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3").returncode == 0
+    f = tmp_path / "out" / victim
+    f.write_bytes(f.read_bytes()[: f.stat().st_size // 2])
+    msg = one_line_error(run("info", str(tmp_path / "out")))
+    assert victim in msg or "decomposition" in msg
+
+
+def test_faces_out_of_range_are_refused_before_computing(tmp_path):
+    points = ellipsoid_with_bumps(6000)
+    vertex = np.empty(len(points), dtype=[("x", "f8"), ("y", "f8"), ("z", "f8")])
+    for a, name in enumerate("xyz"):
+        vertex[name] = points[:, a]
+    face = np.empty(2, dtype=[("vertex_indices", "i4", (3,))])
+    face["vertex_indices"] = [[0, 1, 2], [5, 6, 6000]]
+    PlyData([PlyElement.describe(vertex, "vertex"), PlyElement.describe(face, "face")]).write(str(tmp_path / "in.ply"))
+    msg = one_line_error(run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out")))
+    assert "6000" in msg or "range" in msg
+    assert not (tmp_path / "out").exists()
+
+
+def test_bad_outputs_are_refused_before_computing(tmp_path, monkeypatch, capsys):
+    write_ply(tmp_path / "in.ply", ellipsoid_with_bumps(6000))
+    calls = []
+    monkeypatch.setattr(cli.commands, "decompose", lambda *a, **k: calls.append(1))
+    (tmp_path / "file").write_text("x")
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    for out in (tmp_path / "file", Path("/proc/pointscale-out")):
+        assert cli.main(["decompose", str(tmp_path / "in.ply"), "-o", str(out)]) == 2
+    assert calls == []
+    err = capsys.readouterr().err
+    assert "is a file" in err and "/proc" in err
+    # reconstruct: a folder, an existing file without --force, a missing folder
+    monkeypatch.undo()
+    assert cli.main(["decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "d"), "--levels", "3"]) == 0
+    capsys.readouterr()
+    for out in (locked, tmp_path / "file.ply", tmp_path / "nowhere" / "x.ply"):
+        (tmp_path / "file.ply").write_text("keep me")
+        assert cli.main(["reconstruct", str(tmp_path / "d"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 3 and "folder" in err[0] and "--force" in err[1] and "does not exist" in err[2]
+    assert (tmp_path / "file.ply").read_text() == "keep me"
+    assert cli.main(["reconstruct", str(tmp_path / "d"), "-o", str(tmp_path / "file.ply"), "--force"]) == 0
+    assert len(read_ply(tmp_path / "file.ply").points) == 6000
+
+
+def test_decomposing_again_into_a_folder_needs_force_and_removes_old_levels(tmp_path):
+    write_ply(tmp_path / "in.ply", ellipsoid_with_bumps(8000))
+    assert run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "4").returncode == 0
+    assert (tmp_path / "out" / "level_3.ply").exists()
+    msg = one_line_error(run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3"))
+    assert "--force" in msg and (tmp_path / "out" / "level_3.ply").exists()
+    done = run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3", "--force")
+    assert done.returncode == 0, done.stderr
+    names = sorted(p.name for p in (tmp_path / "out").iterdir())
+    assert names == ["decomposition.npz", "level_0.ply", "level_1.ply", "level_2.ply", "source.npz"]
+
+
+def test_ctrl_c_exits_130_with_one_line_and_no_files(tmp_path):
+    write_ply(tmp_path / "in.ply", ps.shapes.bumpy_sphere(600000, noise=0.001, seed=9))
+    proc = subprocess.Popen([sys.executable, "-m", "pointscale", "decompose", str(tmp_path / "in.ply"), "-o",
+                             str(tmp_path / "out"), "--levels", "4"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    # Wait until it is computing (CPU time past a second: the imports and the read take less).
+    ticks = os.sysconf("SC_CLK_TCK")
+    for _ in range(600):
+        fields = Path(f"/proc/{proc.pid}/stat").read_text().rsplit(")", 1)[1].split()
+        if (int(fields[11]) + int(fields[12])) / ticks > 1.0:
+            break
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, (proc.returncode, err)
+    assert len(err.strip().splitlines()) == 1 and "interrupted" in err
+    assert not (tmp_path / "out").exists() or list((tmp_path / "out").iterdir()) == []
+
+
+def test_gains_may_be_negative_and_must_be_finite(tmp_path):
+    points = ellipsoid_with_bumps(6000)
+    write_ply(tmp_path / "in.ply", points)
+    assert run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3").returncode == 0
+    dec = ps.load(tmp_path / "out" / "decomposition.npz")
+    done = run("reconstruct", str(tmp_path / "out"), "--gains", "-1,1", "-o", str(tmp_path / "neg.ply"))
+    assert done.returncode == 0, done.stderr
+    assert np.abs(read_ply(tmp_path / "neg.ply").points - ps.reconstruct(dec, gains=[-1, 1])).max() < 1e-12
+    for gains in ("1e300,1", "nan,1", "1,inf", "1e308,1e308"):
+        msg = one_line_error(run("reconstruct", str(tmp_path / "out"), "--gains", gains, "-o", str(tmp_path / "g.ply")))
+        assert "gains" in msg
+        assert not (tmp_path / "g.ply").exists()
+    msg = one_line_error(run("reconstruct", str(tmp_path / "out"), "--gains", "1,2,3", "-o", str(tmp_path / "x.ply")))
+    assert "needs 2 values" in msg
+
+
+def test_info_shows_the_real_stats(tmp_path):
+    points = ellipsoid_with_bumps(9000)
+    write_ply(tmp_path / "in.ply", points)
+    assert run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3").returncode == 0
+    done = run("info", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr
+    fresh = ps.decompose(points, levels=3)
+    for l, s in enumerate(fresh.stats):
+        assert f"band {l}: support {s['support_points']} points" in done.stdout
+        assert s["support_points"] > 0
+    assert "ply, 9000 vertices" in done.stdout
+
+
+def test_help_version_and_the_smoother_and_encoding_options(tmp_path):
+    done = run("decompose", "--help")
+    assert done.returncode == 0
+    for option, default in (("--levels", "4"), ("--decimation", "0.25"), ("--kernel", "1.0"), ("--neighbors", "24"),
+                            ("--smoother", "mls"), ("--encoding", "projection"), ("--threads", "0")):
+        assert option in done.stdout and f"(default: {default})" in done.stdout, option
+    done = run("--version")
+    assert done.returncode == 0 and done.stdout.strip() == f"pointscale {ps.__version__}"
+    write_ply(tmp_path / "in.ply", ellipsoid_with_bumps(6000))
+    done = run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3",
+               "--smoother", "diffusion")
+    assert done.returncode == 0, done.stderr
+    assert ps.load(tmp_path / "out" / "decomposition.npz").settings["smoother"] == "diffusion"
 
 
 def test_command_line_errors_are_reported_not_raised(tmp_path):
-    done = run("decompose", str(tmp_path / "missing.ply"), "-o", str(tmp_path / "o"))
-    assert done.returncode == 2 and "no such file" in done.stderr and "Traceback" not in done.stderr
-    points = ps.shapes.bumpy_sphere(3000)
-    write_ply(tmp_path / "in.ply", points)
-    run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3")
-    done = run("reconstruct", str(tmp_path / "out"), "--gains", "1,2,3", "-o", str(tmp_path / "x.ply"))
-    assert done.returncode == 2 and "needs 2 values" in done.stderr
+    msg = one_line_error(run("decompose", str(tmp_path / "missing.ply"), "-o", str(tmp_path / "o")))
+    assert "missing.ply" in msg
 
 
 def test_demo_runs_and_writes_its_files(tmp_path):

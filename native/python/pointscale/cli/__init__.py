@@ -1,0 +1,52 @@
+"""Command line: pointscale decompose | reconstruct | info | demo.
+
+Errors print one line and exit with code 2; Ctrl-C exits with 130 and leaves no partial files.
+"""
+from __future__ import annotations
+
+import sys
+import warnings
+
+from .. import Cancelled, io
+from . import commands
+from .parser import build_parser, join_signed_values
+
+EXIT_ERROR = 2
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, what shells report for Ctrl-C
+
+
+def _one_line(text: str) -> str:
+    lines = str(text).strip().splitlines()
+    return lines[0] if lines else ""
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    print(f"pointscale: warning: {_one_line(message)}", file=sys.stderr)
+
+
+def main(argv=None) -> int:
+    argv = join_signed_values(sys.argv[1:] if argv is None else list(argv))
+    parser = build_parser(", ".join(io.SUPPORTED_EXTENSIONS))
+    args = parser.parse_args(argv)
+    run = {"decompose": commands.cmd_decompose, "reconstruct": commands.cmd_reconstruct,
+           "info": commands.cmd_info, "demo": commands.cmd_demo}[args.command]
+    warnings.showwarning = _show_warning
+    try:
+        run(args)
+    except KeyboardInterrupt:
+        print("pointscale: interrupted; no files were written", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Cancelled:
+        print("pointscale: cancelled; no files were written", file=sys.stderr)
+        return EXIT_ERROR
+    except ValueError as exc:
+        print(f"pointscale: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_ERROR
+    except MemoryError:
+        print("pointscale: error: out of memory", file=sys.stderr)
+        return EXIT_ERROR
+    except OSError as exc:
+        where = f" {exc.filename}" if exc.filename else ""
+        print(f"pointscale: error:{where} {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_ERROR
+    return 0

@@ -1,0 +1,73 @@
+"""The decomposition folder that `pointscale decompose` writes and the other commands read.
+
+    decomposition.npz   the model (pointscale.load reads it)
+    source.npz          the input's faces, every vertex and face attribute and what its format
+                        needs to be written back (pointscale.io.Scan.to_arrays), no pickles
+    level_0.EXT ..      every level as a file in the input's format (or --format), with the
+    level_k.EXT         level's own normals and the input's attributes
+
+Both .npz files are read with allow_pickle=False and checked before use.
+"""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from .. import io
+from ..multiscale import load
+
+DECOMPOSITION_FILE = "decomposition.npz"
+SOURCE_FILE = "source.npz"
+_LEVEL_FILE = re.compile(r"^level_\d+\.[A-Za-z0-9]+$")
+
+
+def level_name(level: int, extension: str) -> str:
+    return f"level_{level}{extension}"
+
+
+def owned_files(folder: Path) -> list[Path]:
+    """The files of an earlier decomposition in `folder`: what decomposing again replaces."""
+    if not folder.is_dir():
+        return []
+    names = [p for p in folder.iterdir() if p.is_file() and _LEVEL_FILE.match(p.name)]
+    names += [folder / n for n in (DECOMPOSITION_FILE, SOURCE_FILE, "faces.npy") if (folder / n).is_file()]
+    return sorted(names)
+
+
+def model_file(path: Path) -> Path:
+    return path / DECOMPOSITION_FILE if path.is_dir() else path
+
+
+def read_source(path: Path):
+    """The input's attributes saved beside a decomposition, or None for a folder without them."""
+    folder = model_file(path).parent
+    source = folder / SOURCE_FILE
+    if source.is_file():
+        try:
+            return io.Scan.from_arrays(source)
+        except ValueError:
+            raise
+        except Exception as exc:  # zip and header errors of a damaged or crafted file
+            raise ValueError(f"cannot read {source}: {_one_line(exc)}") from None
+    if (folder / "faces.npy").is_file():
+        raise ValueError(f"{folder / 'faces.npy'} is an older pointscale's face file, which needs loading Python "
+                         "objects (a pickle) and is not read; decompose the input again")
+    return None
+
+
+def read_decomposition(path: Path):
+    """(Decomposition, source Scan or None) of a folder written by decompose, or of its .npz."""
+    file = model_file(path)
+    if not file.is_file():
+        raise ValueError(f"no decomposition at {path} (expected a folder holding {DECOMPOSITION_FILE}, or the file)")
+    dec = load(file)
+    source = read_source(path)
+    if source is not None and source.n_points != dec.n_points:
+        raise ValueError(f"{file.parent / SOURCE_FILE} describes {source.n_points} points, "
+                         f"the decomposition {dec.n_points}: the folder mixes two runs")
+    return dec, source
+
+
+def _one_line(exc: Exception) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__

@@ -1,0 +1,47 @@
+"""What a level file holds: the level's points, its own normals, its detail, the input's attributes."""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import _core
+from .._checks import centre
+from ..multiscale import reconstruct_levels  # noqa: F401  (the public form of reconstruct_with_normals)
+
+# Neighbours of the PCA normals of the finest level, the one level the model stores no normals for.
+FINEST_NORMAL_NEIGHBORS = 16
+
+
+def finest_normals(points: np.ndarray, reference: np.ndarray, threads: int) -> np.ndarray:
+    """Unit normals of the finest level (n, 3): PCA normals of its own points, each turned to the
+    side of `reference`, the normals (n, 3) of the level below at the same point. The input's
+    normals are not reused: after a filter or an edit they no longer describe the surface."""
+    _core.set_threads(int(threads))
+    normals = _core.estimate_normals(points - centre(points), FINEST_NORMAL_NEIGHBORS, False)
+    flip = np.einsum("ij,ij->i", normals, reference) < 0
+    normals[flip] *= -1.0
+    return normals
+
+
+def reconstruct_with_normals(dec, gains, base, threads: int, progress):
+    """(finest level (n, 3), normals (n, 3) of the level below it) of reconstruct(dec, gains, base):
+    the same points, plus what finest_normals() orients the result's normals by."""
+    from ..multiscale import _base_array, _gains_array
+    _core.set_threads(int(threads))
+    levels, normals = dec._model.reconstruct(_gains_array(dec, gains), _base_array(dec, base), True, -1, progress,
+                                             dec.origin)
+    return levels[-1], normals[-1]
+
+
+def detail_attribute_name(scan) -> str:
+    """'detail', unless the input has a property of that name already."""
+    return "detail" if "detail" not in scan.vertex_attributes else "pointscale_detail"
+
+
+def level_scan(template, points: np.ndarray, normals: np.ndarray, detail):
+    """`template`'s faces and attributes on new geometry, plus the band's detail as a vertex
+    scalar when given (the finest level has none)."""
+    scan = template.with_geometry(points, normals)
+    if detail is not None:
+        dtype = np.float64 if np.dtype(template.precision) == np.float64 else np.float32
+        scan.vertex_attributes[detail_attribute_name(template)] = np.asarray(detail, dtype=dtype)
+    return scan

@@ -1,0 +1,87 @@
+"""The command line's options: every one with help text and its default."""
+from __future__ import annotations
+
+import argparse
+
+from .. import __version__
+
+# Options whose value may start with a minus sign (a negative gain): argparse would take
+# "--gains -1,1,1" for two options, so main() joins such pairs into "--gains=-1,1,1" first.
+OPTIONS_WITH_SIGNED_VALUES = ("--gains",)
+
+
+class _Formatter(argparse.HelpFormatter):
+    """Shows each option's default, where it has one worth showing."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        shown = action.default is not None and action.default is not False and action.default != argparse.SUPPRESS
+        if action.option_strings and shown and "%(default)" not in text:
+            text += " (default: %(default)s)"
+        return text
+
+
+def join_signed_values(argv: list[str]) -> list[str]:
+    out = []
+    i = 0
+    while i < len(argv):
+        if argv[i] in OPTIONS_WITH_SIGNED_VALUES and i + 1 < len(argv):
+            out.append(f"{argv[i]}={argv[i + 1]}")
+            i += 2
+        else:
+            out.append(argv[i])
+            i += 1
+    return out
+
+
+def build_parser(formats: str) -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="pointscale", formatter_class=_Formatter,
+        description="Multiscale point-sampled surfaces (Pauly, Kobbelt, Gross 2006): split a scan or mesh into a "
+                    "smooth base and detail bands, filter the bands, carry the detail onto an edited base.",
+        epilog=f"File formats, chosen by extension: {formats}.")
+    parser.add_argument("--version", action="version", version=f"pointscale {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    d = sub.add_parser("decompose", formatter_class=_Formatter,
+                       help="split a model into a smooth base and detail bands",
+                       description="Decomposes INPUT into levels P^0 (smoothest) .. P^k (the input) and writes a "
+                                   "folder: decomposition.npz, source.npz (the input's attributes) and "
+                                   "level_0 .. level_k in the input's format.")
+    d.add_argument("input", help=f"the model to decompose ({formats})")
+    d.add_argument("-o", "--output", required=True, help="output folder (created if missing)")
+    d.add_argument("--levels", type=int, default=4, help="point clouds P^0..P^k; the detail bands are levels - 1")
+    d.add_argument("--decimation", type=float, default=0.25,
+                   help="gamma in (0, 1): each coarser level is supported by this fraction of the points")
+    d.add_argument("--kernel", type=float, default=1.0, help="kernel width as a multiple of the local spacing")
+    d.add_argument("--neighbors", type=int, default=24, help="support points in each plane fit")
+    d.add_argument("--smoother", choices=("mls", "diffusion"), default="mls",
+                   help="low-pass filter of each level: MLS projection (Sec. 7) or diffusion (Sec. 5.1)")
+    d.add_argument("--encoding", choices=("projection", "rayshoot"), default="projection",
+                   help="detail encoding: projection (exact round trip) or ray shooting (Sec. 6.1)")
+    d.add_argument("--format", help="extension of the level files, e.g. .ply or .las (default: the input's)")
+    d.add_argument("--force", action="store_true",
+                   help="replace an earlier decomposition in the output folder (its level files are removed)")
+    d.add_argument("--threads", type=int, default=0, help="worker threads, 0 for all cores")
+
+    r = sub.add_parser("reconstruct", formatter_class=_Formatter,
+                       help="rebuild the model from a decomposition, with band gains or an edited base",
+                       description="Rebuilds the finest level from a decomposition folder, each band scaled by its "
+                                   "gain, on the stored or an edited base, with the input's attributes.")
+    r.add_argument("decomposition", help="folder written by decompose (or its decomposition.npz)")
+    r.add_argument("-o", "--output", required=True, help="output file; its extension picks the format")
+    r.add_argument("--gains", help="comma-separated gain per band, coarse to fine, e.g. 2,2,1 or -1,1,1 "
+                                   "(default: all 1)")
+    r.add_argument("--base", help="an edited level 0 (same vertex count and order), in any supported format")
+    r.add_argument("--force", action="store_true", help="overwrite the output file if it exists")
+    r.add_argument("--threads", type=int, default=0, help="worker threads, 0 for all cores")
+
+    i = sub.add_parser("info", formatter_class=_Formatter, help="describe a decomposition",
+                       description="Prints a decomposition's levels, per-band statistics, settings and source.")
+    i.add_argument("decomposition", help="folder written by decompose (or its decomposition.npz)")
+
+    m = sub.add_parser("demo", formatter_class=_Formatter,
+                       help="run the whole pipeline on procedural shapes (no download)")
+    m.add_argument("-o", "--output", default="pointscale-demo", help="output folder")
+    m.add_argument("--points", type=int, default=100000, help="points of the demo sphere")
+    return parser
