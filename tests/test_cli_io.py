@@ -158,6 +158,13 @@ def test_formats_are_chosen_by_extension_in_both_directions(tmp_path):
     las_points = np.column_stack([level.x, level.y, level.z])
     assert back.shape == points.shape and np.abs(back - points).max() < 1e-3  # the LAS grid of 1 mm
     assert las_points.shape == points.shape
+    done = run("decompose", str(tmp_path / "site.las"), "-o", str(tmp_path / "as_ply"), "--levels", "3",
+               "--format", "ply")
+    assert done.returncode == 0, done.stderr
+    as_ply = read_ply(tmp_path / "as_ply" / "level_0.ply")
+    # The same level 0, unquantised: within half the LAS file's 1 mm grid of what it stored.
+    assert np.abs(as_ply.points - np.column_stack([level.x, level.y, level.z])).max() <= 0.0005 + 1e-9
+    assert np.array_equal(as_ply.vertex_attributes["intensity"], np.arange(len(points)))
     msg = one_line_error(run("reconstruct", str(tmp_path / "out"), "-o", str(tmp_path / "same.dwg")))
     assert ".dwg" in msg and ".ply" in msg and ".laz" in msg
 

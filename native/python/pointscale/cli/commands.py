@@ -50,25 +50,39 @@ def describe_source(scan) -> str:
     return "; ".join(parts)
 
 
-def _run_writes(tasks: list, progress: CommandProgress, stage: str) -> None:
-    """Runs the writers (callables) on two threads: the formats' encoders and the disk overlap.
-    Ctrl-C or an error cancels the writes not yet started; the caller discards the files."""
-    report = progress.stage(stage)
-    pool = ThreadPoolExecutor(max_workers=2)
-    try:
-        futures = [pool.submit(task) for task in tasks]
-        for done, future in enumerate(futures, 1):
+class _Writers:
+    """Runs writers (callables) on two threads, so the formats' encoders, the disk and the main
+    thread's remaining computing overlap. Ctrl-C or an error cancels the writes not yet started;
+    the caller's StagedOutput then discards the files."""
+
+    def __init__(self, progress: CommandProgress, stage: str, expected: int):
+        self._pool = ThreadPoolExecutor(max_workers=2)
+        self._futures = []
+        self._progress, self._stage, self._expected = progress, stage, expected
+
+    def submit(self, task) -> None:
+        self._futures.append(self._pool.submit(task))
+
+    def wait(self) -> None:
+        report = self._progress.stage(self._stage)
+        for done, future in enumerate(self._futures, 1):
             future.result()
-            report(done / len(futures))
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+            report(done / self._expected)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self._pool.shutdown(wait=True, cancel_futures=True)
+        return False
 
 
 def cmd_decompose(args) -> None:
     out = Path(args.output)
-    extension = writable_extension(args.format if args.format else args.input, "--format" if args.format else "input")
-    if args.format and not extension.startswith("."):
-        extension = "." + extension
+    if args.format:
+        extension = writable_extension("level" + "." * (not args.format.startswith(".")) + args.format, "--format")
+    else:
+        extension = writable_extension(args.input, "input")
     earlier = check_output_folder(out, args.force)
     stages = {"reading": 1.0, "decomposing": 5.0, "levels": 0.6, "writing": 1.6}
     with CommandProgress(stages) as progress, StagedOutput() as staged:
@@ -83,17 +97,20 @@ def cmd_decompose(args) -> None:
         k = dec.n_bands
         levels = [dec.level(l) for l in range(k + 1)]
         normals = [dec.normals(l) for l in range(k)]
-        normals.append(finest_normals(levels[k], normals[k - 1], args.threads))
 
         staged.make_dir(out)
-        model_tmp = staged.temporary(out / DECOMPOSITION_FILE)
-        source_tmp = staged.temporary(out / SOURCE_FILE)
-        tasks = [lambda: np.savez(model_tmp, **dec.to_dict()), lambda: np.savez(source_tmp, **scan.to_arrays())]
-        for l in range(k + 1):
-            tmp = staged.temporary(out / level_name(l, extension))
-            detail = dec.details[l] if l < k else None
-            tasks.append(lambda tmp=tmp, l=l, detail=detail: io.write(tmp, level_scan(scan, levels[l], normals[l], detail)))
-        _run_writes(tasks, progress, "writing")
+        with _Writers(progress, "writing", expected=k + 3) as writers:
+            model_tmp = staged.temporary(out / DECOMPOSITION_FILE)
+            source_tmp = staged.temporary(out / SOURCE_FILE)
+            writers.submit(lambda: np.savez(model_tmp, **dec.to_dict()))
+            writers.submit(lambda: np.savez(source_tmp, **scan.to_arrays()))
+            level_tmp = [staged.temporary(out / level_name(l, extension)) for l in range(k + 1)]
+            for l in range(k):
+                writers.submit(lambda l=l: io.write(level_tmp[l], level_scan(scan, levels[l], normals[l], dec.details[l])))
+            # The finest level's normals are computed while the other files are written.
+            normals.append(finest_normals(levels[k], normals[k - 1], args.threads))
+            writers.submit(lambda: io.write(level_tmp[k], level_scan(scan, levels[k], normals[k], None)))
+            writers.wait()
         written = {out / DECOMPOSITION_FILE, out / SOURCE_FILE} | {out / level_name(l, extension) for l in range(k + 1)}
         staged.commit(remove_first=[p for p in earlier if p not in written])
     print(f"decomposed {args.input} in {elapsed:.2f} s")
@@ -123,7 +140,9 @@ def cmd_reconstruct(args) -> None:
         normals = finest_normals(points, reference, args.threads)
         template = source if source is not None else io.Scan(points=points)
         tmp = staged.temporary(out)
-        _run_writes([lambda: io.write(tmp, level_scan(template, points, normals, None))], progress, "writing")
+        with _Writers(progress, "writing", expected=1) as writers:
+            writers.submit(lambda: io.write(tmp, level_scan(template, points, normals, None)))
+            writers.wait()
         staged.commit()
     print(f"wrote {out} ({dec.n_points} points, gains {args.gains or 'all 1'}"
           f"{', edited base ' + args.base if args.base else ''})")
