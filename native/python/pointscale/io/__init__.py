@@ -1,0 +1,78 @@
+"""File formats: read(path) -> Scan and write(path, scan), the format chosen by the extension.
+
+    scan = pointscale.io.read("site.laz")            # Scan: points (n, 3) float64, attributes...
+    pointscale.io.write("site_smooth.laz", scan.with_geometry(new_points, scan.normals))
+
+PLY (plyfile), LAS/LAZ (laspy + lazrs), OBJ/OFF/STL (trimesh), XYZ/PTS (numpy), E57 (pye57,
+optional). Every reader raises ValueError with one line naming the file for anything missing or
+damaged; every writer writes through atomic_write, so a failed write leaves no partial file.
+"""
+from __future__ import annotations
+
+import dataclasses
+import os
+from pathlib import Path
+
+import numpy as np
+
+from . import e57, las, mesh_formats, ply, text
+from .atomic import atomic_write
+from .scan import Scan
+
+# extension -> (reader, writer)
+_FORMATS = {
+    ".ply": (ply.read_ply, ply.write_ply),
+    ".las": (las.read_las, las.write_las),
+    ".laz": (las.read_las, las.write_las),
+    ".obj": (mesh_formats.read_obj, mesh_formats.write_obj),
+    ".off": (mesh_formats.read_off, mesh_formats.write_off),
+    ".stl": (mesh_formats.read_stl, mesh_formats.write_stl),
+    ".xyz": (text.read_xyz, text.write_xyz),
+    ".pts": (text.read_pts, text.write_pts),
+    ".e57": (e57.read_e57, e57.write_e57),
+}
+SUPPORTED_EXTENSIONS = tuple(_FORMATS)
+
+__all__ = ["Scan", "SUPPORTED_EXTENSIONS", "atomic_write", "read", "read_ply", "write", "write_ply"]
+
+
+def read(path) -> Scan:
+    """The Scan in the file at path, the format chosen by its extension (case-insensitive)."""
+    return _format(path)[0](os.fspath(path))
+
+
+def write(path, scan: Scan) -> None:
+    """Writes scan to path in the format of its extension (case-insensitive), atomically."""
+    if not isinstance(scan, Scan):
+        raise ValueError(f"write needs a Scan, got {type(scan).__name__}")
+    try:
+        scan = dataclasses.replace(scan)  # checks again what may have been edited in place (attributes, faces)
+    except ValueError as exc:
+        raise ValueError(f"{os.fspath(path)}: {exc}") from None
+    if not np.isfinite(scan.points).all():
+        raise ValueError(f"{os.fspath(path)}: the scan has non-finite points (did you call with_geometry?)")
+    _format(path)[1](os.fspath(path), scan)
+
+
+def read_ply(path) -> Scan:
+    """A PLY file as a Scan (.points (n, 3) float64, .normals, .faces): kept for existing callers."""
+    return ply.read_ply(path)
+
+
+def write_ply(path, points, normals=None, faces=None, scalars: dict | None = None, binary: bool = True) -> None:
+    """Writes points (n, 3) with optional normals (n, 3), faces (index lists) and per-point scalar
+    fields {name: (n,)}. Coordinates are stored as float64 when given float64, float32 when
+    given float32; scalars keep their dtype."""
+    points = np.asarray(points)
+    precision = points.dtype if points.dtype in (np.float32, np.float64) else np.dtype(np.float64)
+    scan = Scan(points=points, precision=precision, normals=normals, faces=faces,
+                vertex_attributes=dict(scalars or {}))
+    ply.write_ply(path, scan, binary=binary)
+
+
+def _format(path):
+    suffix = Path(os.fspath(path)).suffix.lower()
+    if suffix not in _FORMATS:
+        raise ValueError(f"{os.fspath(path)}: unknown file extension {suffix or '(none)'!r}; "
+                         f"supported: {', '.join(SUPPORTED_EXTENSIONS)}")
+    return _FORMATS[suffix]

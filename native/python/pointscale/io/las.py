@@ -1,0 +1,238 @@
+"""LAS and LAZ through laspy (LAZ with the lazrs backend).
+
+A LAS file keeps its header's scales, offsets, point format and version, every point record
+field (as vertex attributes named as laspy names them: intensity, return_number, classification,
+gps_time, red, ...), its extra bytes and its VLRs/EVLRs (the CRS lives there), so that writing
+the Scan back gives the same kind of file. Normals, which LAS has no field for, are stored as
+extra bytes nx, ny, nz (float32 unless the file had another type).
+
+A Scan from another format is written as LAS 1.4, point format 7 when it has red/green/blue
+(8-bit colours are scaled by 257 to LAS's 16 bits) and 6 otherwise; the offset is the bounding
+box minimum and the scale the power of ten at or below 1e-6 of the bounding box diagonal, so
+coordinates are kept to half of that (e.g. 1e-7 m for a 0.3 m scan, 1 mm for a 2 km site).
+Other attributes become extra bytes with their own dtype.
+"""
+from __future__ import annotations
+
+import math
+import os
+import warnings
+
+import numpy as np
+
+from .atomic import atomic_write
+from .scan import Scan
+
+COORDINATE_FIELDS = ("X", "Y", "Z")
+NORMAL_NAMES = ("nx", "ny", "nz")
+# Written by laspy itself from the point format and the compression: never copied.
+_MANAGED_VLRS = {("LASF_Spec", 4), ("laszip encoded", 22204)}
+_COLOURS = ("red", "green", "blue")
+
+
+def _laspy():
+    try:
+        import laspy
+    except ImportError:
+        raise ValueError("reading and writing .las/.laz needs laspy: pip install 'laspy[lazrs]'") from None
+    return laspy
+
+
+def read_las(path) -> Scan:
+    """Reads a .las or .laz file into a Scan (points in float64 from the scaled integers)."""
+    path = os.fspath(path)
+    laspy = _laspy()
+    if not os.path.isfile(path):
+        raise ValueError(f"no such file: {path}")
+    try:
+        las = laspy.read(path)
+        count = int(las.header.point_count)
+        if len(las.points) != count:
+            raise ValueError(f"the header says {count} points, the file holds {len(las.points)} (truncated?)")
+        points = np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)]).astype(np.float64)
+        extra = {d.name: d for d in las.point_format.extra_dimensions}
+        attributes = {name: np.array(las[name]) for name in las.point_format.dimension_names
+                      if name not in COORDINATE_FIELDS}
+        info = _header_info(las, path)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {_first_line(exc)}") from None
+    except Exception as exc:  # laspy, lazrs and numpy errors from damaged files
+        hint = " (LAZ needs lazrs: pip install 'laspy[lazrs]')" if "LazBackend" in str(exc) else ""
+        raise ValueError(f"{path}: not a readable LAS/LAZ file ({type(exc).__name__}: {_first_line(exc)}){hint}") \
+            from None
+    if count == 0:
+        raise ValueError(f"{path}: no points")
+    if not np.isfinite(points).all():
+        raise ValueError(f"{path}: non-finite coordinates")
+    normals = None
+    if all(n in extra for n in NORMAL_NAMES):
+        normals = np.column_stack([attributes.pop(n) for n in NORMAL_NAMES]).astype(np.float64)
+        info["normal_type"] = extra["nx"].dtype.str if hasattr(extra["nx"].dtype, "str") else "f4"
+    try:
+        return Scan(points=points, precision=np.float64, normals=normals, vertex_attributes=attributes,
+                    format_info=info)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
+
+
+def write_las(path, scan: Scan) -> None:
+    """Writes a Scan as .las or .laz (by the extension): the source's header when it was LAS,
+    else LAS 1.4 with the point format, scale and offset described in the module docstring."""
+    path = os.fspath(path)
+    laspy = _laspy()
+    compress = path.lower().endswith(".laz")
+    info = scan.format_info if scan.format_info.get("format") in ("las", "laz") else {}
+    attributes = dict(scan.vertex_attributes)
+    if info:
+        point_format, version = int(info["point_format"]), str(info["version"])
+        scales, offsets = np.array(info["scales"], dtype=np.float64), np.array(info["offsets"], dtype=np.float64)
+    else:
+        point_format = 7 if all(c in attributes for c in _COLOURS) else 6
+        version = "1.4"
+        scales, offsets = default_scale_offset(scan.points)
+    offsets = _offsets_that_fit(scan.points, scales, offsets, path)
+    try:
+        header = laspy.LasHeader(point_format=point_format, version=version)
+        header.scales, header.offsets = scales, offsets
+        standard = {d.name: d for d in header.point_format.dimensions
+                    if d.is_standard and d.name not in COORDINATE_FIELDS}
+        values, extra_params = _fields(scan, attributes, standard, info, laspy)
+        for params in extra_params:
+            header.add_extra_dim(params)
+        for key in ("file_source_id", "system_identifier", "generating_software"):
+            if key in info:
+                setattr(header, key, info[key])
+        if "global_encoding" in info:
+            header.global_encoding.value = int(info["global_encoding"])
+        header.vlrs.extend(_vlr(laspy, v) for v in info.get("vlrs", []))
+        if info.get("evlrs"):
+            header.evlrs = laspy.VLRList(_vlr(laspy, v) for v in info["evlrs"])
+        las = laspy.LasData(header)
+        las.x, las.y, las.z = scan.points[:, 0], scan.points[:, 1], scan.points[:, 2]
+        for name, column in values.items():
+            las[name] = column
+    except ValueError:
+        raise
+    except Exception as exc:
+        raise ValueError(f"{path}: cannot write LAS ({type(exc).__name__}: {_first_line(exc)})") from None
+    with atomic_write(path) as temporary:
+        try:
+            las.write(str(temporary), do_compress=compress)
+        except Exception as exc:
+            raise ValueError(f"{path}: cannot write LAS ({type(exc).__name__}: {_first_line(exc)})") from None
+
+
+def default_scale_offset(points: np.ndarray):
+    """(scales (3,), offsets (3,)) for a new file: offset at the bounding box minimum, scale the
+    power of ten at or below 1e-6 of the diagonal (1e-3 for a single point)."""
+    low, high = points.min(axis=0), points.max(axis=0)
+    diagonal = float(np.linalg.norm(high - low))
+    scale = 10.0 ** math.floor(math.log10(diagonal * 1e-6)) if diagonal > 0 else 1e-3
+    return np.full(3, scale), low.astype(np.float64)
+
+
+def _offsets_that_fit(points, scales, offsets, path):
+    """offsets, or the bounding box minimum when edited points no longer fit int32 around them."""
+    stored = np.round((points - offsets) / scales)
+    if np.all(np.abs(stored) <= np.iinfo(np.int32).max):
+        return offsets
+    new = points.min(axis=0)
+    if np.any((points.max(axis=0) - new) / scales > np.iinfo(np.int32).max):
+        raise ValueError(f"{path}: the points span more than LAS's int32 range at scale {scales.tolist()}")
+    warnings.warn(f"{path}: points moved outside the int32 range around the LAS offset; offset moved to "
+                  f"{new.tolist()}", stacklevel=3)
+    return new
+
+
+def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy):
+    """(name -> values for the point records, [ExtraBytesParams] for fields the format lacks)."""
+    values, params = {}, []
+    declared = {d["name"]: d for d in info.get("extra_dimensions", [])}
+    if scan.normals is not None:
+        for i, name in enumerate(NORMAL_NAMES):
+            attributes[name] = scan.normals[:, i].astype(info.get("normal_type", "f4"))
+    foreign = not info
+    for name, column in attributes.items():
+        column = np.asarray(column)
+        if name in standard:
+            if foreign and name in _COLOURS and column.dtype == np.uint8:
+                column = column.astype(np.uint16) * 257  # 8-bit to LAS's 16-bit colour, 255 -> 65535
+            if _fits(column, standard[name]):
+                values[name] = column
+                continue
+            warnings.warn(f"attribute {name!r} ({column.dtype}) does not fit the LAS field; kept as extra "
+                          f"bytes {name + '_value'!r}", stacklevel=4)
+            name = name + "_value"
+        if column.dtype.kind == "b":
+            column = column.astype(np.uint8)
+        if name in declared:
+            d = declared[name]
+            params.append(laspy.ExtraBytesParams(name=name, type=d["type"], description=d.get("description", ""),
+                                                 scales=d.get("scales"), offsets=d.get("offsets")))
+            values[name] = column
+        elif column.ndim == 1 or column.shape[1] <= 3:
+            kind = column.dtype.str.lstrip("<>=|")
+            params.append(laspy.ExtraBytesParams(name=name, type=kind if column.ndim == 1 else f"{column.shape[1]}{kind}"))
+            values[name] = column
+        else:  # LAS extra bytes hold at most 3 values per field: (n, c) becomes c fields
+            for j in range(column.shape[1]):
+                params.append(laspy.ExtraBytesParams(name=f"{name}_{j}", type=column.dtype.str.lstrip("<>=|")))
+                values[f"{name}_{j}"] = column[:, j]
+    return values, params
+
+
+def _fits(column: np.ndarray, dimension) -> bool:
+    """Whether column can be stored in a standard LAS field unchanged (bit fields by range)."""
+    if column.ndim != 1 or column.dtype.kind not in "biuf":
+        return False
+    if dimension.dtype is None:  # a bit field such as return_number (3 or 4 bits)
+        low, high = 0, 2 ** int(dimension.num_bits) - 1
+    else:
+        dtype = np.dtype(dimension.dtype)
+        if np.can_cast(column.dtype, dtype, "safe"):
+            return True
+        if dtype.kind == "f":
+            return column.dtype.kind in "biu" or column.dtype.itemsize <= dtype.itemsize
+        low, high = np.iinfo(dtype).min, np.iinfo(dtype).max
+    if column.size == 0:
+        return True
+    whole = column.dtype.kind != "f" or np.array_equal(column, np.round(column))
+    return bool(whole and column.min() >= low and column.max() <= high)
+
+
+def _header_info(las, path) -> dict:
+    h = las.header
+    info = {"format": "laz" if path.lower().endswith(".laz") else "las",
+            "version": f"{h.version.major}.{h.version.minor}", "point_format": int(h.point_format.id),
+            "scales": [float(s) for s in h.scales], "offsets": [float(o) for o in h.offsets],
+            "coordinates": "int32 X, Y, Z with x = X * scale + offset",
+            "file_source_id": int(h.file_source_id), "global_encoding": int(h.global_encoding.value),
+            "system_identifier": str(h.system_identifier), "generating_software": str(h.generating_software)}
+    info["extra_dimensions"] = [_extra_info(d) for d in las.point_format.extra_dimensions]
+    info["vlrs"] = [_vlr_info(v) for v in h.vlrs if (v.user_id, v.record_id) not in _MANAGED_VLRS]
+    info["evlrs"] = [_vlr_info(v) for v in (h.evlrs or []) if (v.user_id, v.record_id) not in _MANAGED_VLRS]
+    return info
+
+
+def _extra_info(d) -> dict:
+    base = np.dtype(d.dtype).base if np.dtype(d.dtype).shape else np.dtype(d.dtype)
+    kind = base.str.lstrip("<>=|")
+    return {"name": d.name, "type": kind if d.num_elements == 1 else f"{d.num_elements}{kind}",
+            "description": str(d.description or ""),
+            "scales": None if d.scales is None else [float(s) for s in np.atleast_1d(d.scales)],
+            "offsets": None if d.offsets is None else [float(o) for o in np.atleast_1d(d.offsets)]}
+
+
+def _vlr_info(v) -> dict:
+    data = v.record_data_bytes() if hasattr(v, "record_data_bytes") else bytes(v.record_data)
+    return {"user_id": str(v.user_id), "record_id": int(v.record_id), "description": str(v.description),
+            "data": bytes(data)}
+
+
+def _vlr(laspy, v: dict):
+    return laspy.VLR(user_id=v["user_id"], record_id=int(v["record_id"]), description=v.get("description", ""),
+                     record_data=bytes(v["data"]))
+
+
+def _first_line(exc: Exception) -> str:
+    return str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__

@@ -1,0 +1,170 @@
+"""Wavefront OBJ, parsed with numpy: v (with optional r g b colours), vt, vn and f lines.
+
+trimesh's OBJ loader was not used: even with maintain_order it drops vertices no face uses (a
+point cloud with a few faces loses points) and returns UVs only when it can load the material.
+
+Vertex order is the file's. OBJ gives normals and UVs per face corner; a Scan keeps them per
+vertex (the points are what Pointscale processes, so vertices are never split): a vertex whose
+corners disagree (a UV seam) keeps its first corner's value, with a warning. Polygons are kept as
+they are (no triangulation). Negative (relative) indices are resolved against the counts at the
+end of the file, which is exact when all vertices come before the faces, as in nearly every file.
+Groups, objects, materials and lines (l) are not kept.
+"""
+from __future__ import annotations
+
+import io
+import os
+import warnings
+
+import numpy as np
+
+from .atomic import atomic_write
+from .scan import Scan
+from .text_tables import colour_for_text, numbers, polygons, savetxt
+
+_COLOURS = ("red", "green", "blue")
+_UV_NAMES = (("texture_u", "texture_v"), ("s", "t"), ("u", "v"))
+
+
+def read_obj(path) -> Scan:
+    path = os.fspath(path)
+    lines = _lines(path)
+    v = numbers(lines["v"], "v", path)
+    if len(v) == 0:
+        raise ValueError(f"{path}: no vertices")
+    if v.shape[1] not in (3, 4, 6, 7):
+        raise ValueError(f"{path}: v lines have {v.shape[1]} values; expected x y z [w] or x y z r g b")
+    points = v[:, :3]
+    if not np.isfinite(points).all():
+        raise ValueError(f"{path}: non-finite coordinates")
+    attributes = {}
+    if v.shape[1] >= 6:
+        attributes.update({c: v[:, 3 + i].copy() for i, c in enumerate(_COLOURS)})
+    vn = numbers(lines["vn"], "vn", path)
+    vt = numbers(lines["vt"], "vt", path)
+    faces, corner_vt, corner_vn = _faces(lines["f"], len(v), len(vt), len(vn), path)
+    normals = _per_vertex(vn[:, :3] if len(vn) else vn, faces, corner_vn, len(v), "normals", path)
+    uv = _per_vertex(vt[:, :2] if len(vt) else vt, faces, corner_vt, len(v), "UVs", path)
+    if uv is not None:
+        attributes["texture_u"], attributes["texture_v"] = uv[:, 0].copy(), uv[:, 1].copy()
+    try:
+        return Scan(points=points, precision=np.float64, normals=normals, vertex_attributes=attributes,
+                    faces=faces, format_info={"format": "obj"})
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
+
+
+def write_obj(path, scan: Scan) -> None:
+    """Writes v (with r g b when the scan has red/green/blue), vn, vt (from texture_u/texture_v,
+    s/t or u/v) and f lines; coordinates with %.17g."""
+    path = os.fspath(path)
+    attributes = scan.vertex_attributes
+    kept = []
+    vertex = scan.points
+    if all(c in attributes for c in _COLOURS):
+        vertex = np.column_stack([vertex] + [colour_for_text(attributes[c]) for c in _COLOURS])
+        kept += list(_COLOURS)
+    uv_names = next((pair for pair in _UV_NAMES if all(n in attributes for n in pair)), None)
+    kept += list(uv_names or ())
+    dropped = [n for n in attributes if n not in kept] + list(scan.face_attributes)
+    if dropped:
+        warnings.warn(f"{path}: OBJ has no place for {', '.join(dropped)}; not written", stacklevel=3)
+    buffer = io.StringIO()
+    buffer.write("# written by pointscale\n")
+    savetxt(buffer, "v ", vertex, "%.17g")
+    if scan.normals is not None:
+        savetxt(buffer, "vn ", scan.normals, "%.17g")
+    if uv_names:
+        savetxt(buffer, "vt ", np.column_stack([attributes[n] for n in uv_names]).astype(np.float64), "%.17g")
+    if scan.n_faces:
+        # Normals and UVs are per vertex, so each corner refers to the same index in all of them.
+        corner, refs = {(False, False): ("%d", 1), (True, False): ("%d/%d", 2), (False, True): ("%d//%d", 2),
+                        (True, True): ("%d/%d/%d", 3)}[(uv_names is not None, scan.normals is not None)]
+        if isinstance(scan.faces, np.ndarray):
+            rows = np.repeat(scan.faces + 1, refs, axis=1)
+            np.savetxt(buffer, rows, fmt="f " + " ".join([corner] * scan.faces.shape[1]))
+        else:
+            for face in scan.faces:
+                buffer.write("f " + " ".join(corner % ((i + 1,) * refs) for i in face) + "\n")
+    with atomic_write(path) as temporary:
+        with open(temporary, "w", encoding="utf-8") as f:
+            f.write(buffer.getvalue())
+
+
+def _lines(path: str) -> dict:
+    if not os.path.isfile(path):
+        raise ValueError(f"no such file: {path}")
+    try:
+        with open(path, "r", encoding="utf-8", errors="strict") as f:
+            text = f.read()
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a text OBJ file") from None
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read ({exc})") from None
+    lines = {"v": [], "vt": [], "vn": [], "f": []}
+    for line in text.splitlines():
+        key, _, rest = line.strip().partition(" ")
+        if key in lines:
+            lines[key].append(rest.split("#", 1)[0])
+    return lines
+
+
+def _faces(face_lines: list, nv: int, nvt: int, nvn: int, path: str):
+    """(faces, vt index per corner or None, vn index per corner or None), 0-based."""
+    if not face_lines:
+        return None, None, None
+    lengths = np.array([len(line.split()) for line in face_lines])
+    tokens = " ".join(face_lines).split()
+    slashes = tokens[0].count("/")
+    double = "//" in tokens[0]
+    text = " ".join(tokens)
+    if text.count("/") != slashes * len(tokens) or text.count("//") != double * len(tokens):
+        raise ValueError(f"{path}: face corners mix the forms v, v/vt, v//vn and v/vt/vn")
+    if double:
+        text = text.replace("//", "/0/")
+    try:
+        refs = np.array(text.replace("/", " ").split(), dtype=np.int64).reshape(len(tokens), -1)
+    except ValueError:
+        raise ValueError(f"{path}: a face holds something that is not a vertex index") from None
+    if (lengths < 3).any():
+        raise ValueError(f"{path}: a face has fewer than 3 corners")
+    columns = []
+    for j, count in enumerate((nv, nvt, nvn)[:refs.shape[1]]):
+        column = refs[:, j]
+        if double and j == 1:
+            columns.append(None)
+            continue
+        # OBJ indices are 1-based; negative ones count back from the end.
+        column = np.where(column < 0, column + count, column - 1)
+        if column.size and (column.min() < 0 or column.max() >= count):
+            what = ("vertex", "texture coordinate", "normal")[j]
+            raise ValueError(f"{path}: a face refers to {what} {int(column.max()) + 1}, outside 1..{count}")
+        columns.append(column)
+    columns += [None] * (3 - len(columns))
+    return polygons(lengths, columns[0]), columns[1], columns[2]
+
+
+def _per_vertex(values: np.ndarray, faces, corner: np.ndarray | None, n: int, what: str, path: str):
+    """Per-corner values (vt or vn through the face references) as one per vertex, or None."""
+    if len(values) == 0:
+        return None
+    if corner is None:
+        return values if len(values) == n else None  # no corner references: by index when counts match
+    vertex = faces.ravel() if isinstance(faces, np.ndarray) else np.concatenate(faces)
+    out = np.full((n, values.shape[1]), np.nan)
+    first = np.full(n, -1)
+    used, earliest = np.unique(vertex, return_index=True)
+    first[used] = corner[earliest]  # each vertex takes its earliest corner's value
+    have = first >= 0
+    out[have] = values[first[have]]
+    split = int((~np.all(values[corner] == out[vertex], axis=1)).sum())
+    if split:
+        warnings.warn(f"{path}: {split} face corners give their vertex different {what} (a seam); "
+                      "each vertex keeps its first", stacklevel=4)
+    if not have.all():
+        if len(values) == n:
+            out[~have] = values[~have]
+        else:
+            warnings.warn(f"{path}: {int((~have).sum())} vertices have no {what}; {what} not kept", stacklevel=4)
+            return None
+    return out

@@ -1,0 +1,295 @@
+"""Scan: the contents of one point-cloud or mesh file, format-neutral, and its flat-array form."""
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+# Attribute arrays may hold booleans, integers and floats of any width: nothing a file format
+# needs is a string or an object, and refusing those keeps pickles out of the flat-array form.
+_PLAIN_KINDS = "biuf"
+_VERTEX_PREFIX = "vertex_attributes/"
+_FACE_PREFIX = "face_attributes/"
+_BYTES_PREFIX = "format_bytes/"
+_META_KEY = "meta_json"
+
+
+@dataclass(eq=False)
+class Scan:
+    """One file's contents.
+
+    points             (n, 3) float64, always float64 in memory whatever the file stored.
+    precision          numpy dtype the file stored coordinates in (float32 or float64); writers
+                       store coordinates in it, so float64 in gives float64 out. LAS stores scaled
+                       int32: its Scan says float64 and format_info["coordinates"] tells the rest.
+    normals            (n, 3) float64 or None.
+    vertex_attributes  name -> array of length n, shape (n,) or (n, c), any numeric dtype: every
+                       other per-vertex property, with the file's own names and dtypes.
+    faces              None, (m, k) int64 when every face has k corners, or a list of m int64
+                       arrays for mixed polygons.
+    face_attributes    name -> array of length m (face colours ...).
+    format_info        what a writer needs to write the same kind of file back (format, comments,
+                       text/binary, LAS version, scales, ...). JSON-serialisable, except that
+                       values may be `bytes` (LAS VLR payloads), which to_arrays stores raw.
+    """
+
+    points: np.ndarray
+    precision: np.dtype = np.dtype(np.float64)
+    normals: np.ndarray | None = None
+    vertex_attributes: dict = field(default_factory=dict)
+    faces: np.ndarray | list | None = None
+    face_attributes: dict = field(default_factory=dict)
+    format_info: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        self.points = _coordinates(self.points, "points")
+        n = len(self.points)
+        self.precision = np.dtype(self.precision)
+        if self.normals is not None:
+            self.normals = _coordinates(self.normals, "normals")
+            if len(self.normals) != n:
+                raise ValueError(f"normals has {len(self.normals)} rows for {n} points")
+        self.vertex_attributes = _attributes(self.vertex_attributes, n, "vertex attribute")
+        self.faces = _faces(self.faces, n)
+        self.face_attributes = _attributes(self.face_attributes, self.n_faces, "face attribute")
+        if not isinstance(self.format_info, dict):
+            raise ValueError("format_info must be a dict")
+
+    @property
+    def n_points(self) -> int:
+        return len(self.points)
+
+    @property
+    def n_faces(self) -> int:
+        return 0 if self.faces is None else len(self.faces)
+
+    def with_geometry(self, points, normals=None) -> "Scan":
+        """A new Scan with the same attributes, faces and format_info, and these points (n, 3)
+        and normals (n, 3) or None. The number of points must not change."""
+        points = _coordinates(points, "points")
+        if len(points) != self.n_points:
+            raise ValueError(f"with_geometry needs {self.n_points} points (the scan's attributes are per point), "
+                             f"got {len(points)}")
+        return dataclasses.replace(self, points=points, normals=normals,
+                                   vertex_attributes=dict(self.vertex_attributes),
+                                   face_attributes=dict(self.face_attributes),
+                                   format_info=_copy_info(self.format_info))
+
+    # -- flat-array form, for np.savez / np.load(allow_pickle=False) ------------------------------
+
+    def to_arrays(self) -> dict:
+        """Everything but points and normals as name -> plain numpy array (numeric, or uint8 for
+        JSON text and raw bytes; never an object array), for `np.savez(file, **scan.to_arrays())`."""
+        blobs: list[bytes] = []
+        meta = {"n_points": self.n_points, "precision": self.precision.str,
+                "format_info": _bytes_to_refs(self.format_info, blobs),
+                "vertex_attributes": list(self.vertex_attributes), "face_attributes": list(self.face_attributes)}
+        try:
+            text = json.dumps(meta)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"format_info is not JSON-serialisable: {exc}") from None
+        arrays = {_META_KEY: np.frombuffer(text.encode("utf-8"), dtype=np.uint8).copy()}
+        for i, blob in enumerate(blobs):
+            arrays[f"{_BYTES_PREFIX}{i}"] = np.frombuffer(blob, dtype=np.uint8).copy()
+        for i, (name, values) in enumerate(self.vertex_attributes.items()):
+            arrays[f"{_VERTEX_PREFIX}{i}"] = values
+        for i, (name, values) in enumerate(self.face_attributes.items()):
+            arrays[f"{_FACE_PREFIX}{i}"] = values
+        if isinstance(self.faces, np.ndarray):
+            arrays["faces"] = self.faces
+        elif self.faces is not None:
+            arrays["faces_flat"] = np.concatenate(self.faces) if self.faces else np.zeros(0, np.int64)
+            arrays["faces_offsets"] = np.concatenate([[0], np.cumsum([len(f) for f in self.faces])]).astype(np.int64)
+        return arrays
+
+    @classmethod
+    def from_arrays(cls, arrays, points=None, normals=None) -> "Scan":
+        """The Scan that to_arrays gave, from that dict or from an .npz file (a path, opened with
+        allow_pickle=False). Points are (n, 3) NaN unless given: call with_geometry before writing.
+        Raises ValueError for anything missing, damaged or not plain numbers."""
+        if isinstance(arrays, (str, os.PathLike)):
+            try:
+                with np.load(arrays, allow_pickle=False) as loaded:
+                    if not isinstance(loaded, Mapping):
+                        raise ValueError("not an .npz archive")
+                    return cls.from_arrays({k: _plain(loaded, k) for k in loaded.files}, points, normals)
+            except (OSError, ValueError, EOFError) as exc:
+                raise ValueError(f"cannot read scan attributes from {os.fspath(arrays)}: {exc}") from None
+        if not isinstance(arrays, Mapping):
+            raise ValueError(f"Scan.from_arrays needs a dict of arrays or an .npz path, got {type(arrays).__name__}")
+        return _from_arrays(cls, {k: _plain(arrays, k) for k in arrays}, points, normals)
+
+
+def _from_arrays(cls, arrays: dict, points, normals) -> Scan:
+    if _META_KEY not in arrays:
+        raise ValueError(f"scan arrays lack {_META_KEY!r}")
+    try:
+        meta = json.loads(_as_bytes(arrays[_META_KEY], _META_KEY).decode("utf-8"))
+        n = int(meta["n_points"])
+        precision = np.dtype(meta["precision"])
+        vertex_names = [str(s) for s in meta["vertex_attributes"]]
+        face_names = [str(s) for s in meta["face_attributes"]]
+        info = meta["format_info"]
+    except (KeyError, TypeError, ValueError, UnicodeDecodeError) as exc:
+        raise ValueError(f"scan arrays: damaged {_META_KEY} ({exc})") from None
+    if n < 0 or precision.kind not in "fi" or not isinstance(info, dict):
+        raise ValueError(f"scan arrays: damaged {_META_KEY} (n_points {n}, precision {precision})")
+    blobs = {}
+    for key, value in arrays.items():
+        if key.startswith(_BYTES_PREFIX):
+            blobs[key[len(_BYTES_PREFIX):]] = _as_bytes(value, key)
+    known = {_META_KEY, "faces", "faces_flat", "faces_offsets"} | {_BYTES_PREFIX + k for k in blobs}
+    known |= {f"{_VERTEX_PREFIX}{i}" for i in range(len(vertex_names))}
+    known |= {f"{_FACE_PREFIX}{i}" for i in range(len(face_names))}
+    unknown = sorted(set(arrays) - known)
+    if unknown:
+        raise ValueError(f"scan arrays: unexpected entries {unknown}")
+    vertex = {name: _entry(arrays, f"{_VERTEX_PREFIX}{i}") for i, name in enumerate(vertex_names)}
+    face = {name: _entry(arrays, f"{_FACE_PREFIX}{i}") for i, name in enumerate(face_names)}
+    faces = None
+    if "faces" in arrays:
+        faces = arrays["faces"]
+        if faces.ndim != 2 or faces.dtype.kind not in "iu":
+            raise ValueError(f"scan arrays: faces must be an (m, k) integer array, got {faces.shape} {faces.dtype}")
+    elif "faces_flat" in arrays or "faces_offsets" in arrays:
+        flat, offsets = _entry(arrays, "faces_flat"), _entry(arrays, "faces_offsets")
+        if flat.ndim != 1 or offsets.ndim != 1 or flat.dtype.kind not in "iu" or offsets.dtype.kind not in "iu" \
+                or len(offsets) < 1 or offsets[0] != 0 or offsets[-1] != len(flat) or np.any(np.diff(offsets) < 1):
+            raise ValueError("scan arrays: faces_flat / faces_offsets do not describe a list of polygons")
+        faces = np.split(flat.astype(np.int64), offsets[1:-1])
+    if points is None:
+        points = np.full((n, 3), np.nan)
+    try:
+        info = _refs_to_bytes(info, blobs)
+        scan = cls(points=points, precision=precision, normals=normals, vertex_attributes=vertex, faces=faces,
+                   face_attributes=face, format_info=info)
+    except (KeyError, TypeError) as exc:
+        raise ValueError(f"scan arrays: damaged format_info ({exc})") from None
+    except ValueError as exc:
+        raise ValueError(f"scan arrays: {exc}") from None
+    if scan.n_points != n:
+        raise ValueError(f"scan arrays describe {n} points, got {scan.n_points}")
+    return scan
+
+
+def _plain(arrays, key: str) -> np.ndarray:
+    """arrays[key] as a numeric array. Object arrays are refused before anything unpickles them:
+    np.load(allow_pickle=False) raises on them, and an in-memory object array is refused here."""
+    try:
+        value = np.asarray(arrays[key])
+    except ValueError as exc:  # np.load: "Object arrays cannot be loaded when allow_pickle=False"
+        raise ValueError(f"entry {key!r}: {exc}") from None
+    if value.dtype.kind not in _PLAIN_KINDS:
+        raise ValueError(f"entry {key!r} has dtype {value.dtype}; only plain numbers are accepted")
+    return value
+
+
+def _entry(arrays: dict, key: str) -> np.ndarray:
+    if key not in arrays:
+        raise ValueError(f"scan arrays lack {key!r}")
+    return arrays[key]
+
+
+def _as_bytes(value: np.ndarray, key: str) -> bytes:
+    if value.dtype != np.uint8 or value.ndim != 1:
+        raise ValueError(f"scan arrays: {key!r} must be 1-D uint8 bytes, got {value.shape} {value.dtype}")
+    return value.tobytes()
+
+
+def _bytes_to_refs(value, blobs: list):
+    """format_info with every bytes value replaced by {"__bytes__": index into blobs}."""
+    if isinstance(value, (bytes, bytearray)):
+        blobs.append(bytes(value))
+        return {"__bytes__": str(len(blobs) - 1)}
+    if isinstance(value, dict):
+        return {k: _bytes_to_refs(v, blobs) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_bytes_to_refs(v, blobs) for v in value]
+    return value
+
+
+def _refs_to_bytes(value, blobs: dict):
+    if isinstance(value, dict):
+        if set(value) == {"__bytes__"}:
+            return blobs[str(value["__bytes__"])]
+        return {k: _refs_to_bytes(v, blobs) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_refs_to_bytes(v, blobs) for v in value]
+    return value
+
+
+def _copy_info(value):
+    if isinstance(value, dict):
+        return {k: _copy_info(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_copy_info(v) for v in value]
+    return value
+
+
+def _coordinates(values, what: str) -> np.ndarray:
+    values = np.asarray(values)
+    if values.dtype.kind not in "biuf":
+        raise ValueError(f"{what} must be numbers, got dtype {values.dtype}")
+    values = np.ascontiguousarray(values, dtype=np.float64)
+    if values.ndim != 2 or values.shape[1] != 3:
+        raise ValueError(f"{what} must be (n, 3), got {values.shape}")
+    return values
+
+
+def _attributes(attributes, count: int, what: str) -> dict:
+    if not isinstance(attributes, Mapping):
+        raise ValueError(f"{what}s must be a dict of arrays")
+    out = {}
+    for name, values in attributes.items():
+        values = np.asarray(values)
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"{what} names must be non-empty strings, got {name!r}")
+        if values.dtype.kind not in _PLAIN_KINDS:
+            raise ValueError(f"{what} {name!r} has dtype {values.dtype}; only plain numbers are kept")
+        if values.ndim not in (1, 2) or len(values) != count:
+            raise ValueError(f"{what} {name!r} has shape {values.shape}, expected ({count},) or ({count}, c)")
+        out[name] = values
+    return out
+
+
+def _faces(faces, n: int):
+    """faces as (m, k) int64 or a list of int64 arrays (mixed polygons), every index in [0, n)."""
+    if faces is None:
+        return None
+    if isinstance(faces, np.ndarray) and faces.dtype.kind != "O":
+        if faces.ndim != 2 or (faces.size and faces.dtype.kind not in "iu"):
+            raise ValueError(f"faces must be an (m, k) integer array, got {faces.shape} {faces.dtype}")
+        faces = faces.astype(np.int64, copy=False)
+        flat = faces.ravel()
+    else:
+        faces = [_index_list(f) for f in faces]
+        if any(f.ndim != 1 or (f.size and f.dtype.kind not in "iu") or len(f) < 3 for f in faces):
+            raise ValueError("faces must be integer index lists of at least 3 vertices each")
+        faces = [f.astype(np.int64, copy=False) for f in faces]
+        if len({len(f) for f in faces}) <= 1:
+            faces = np.array(faces, dtype=np.int64).reshape(len(faces), -1 if faces else 3)
+            flat = faces.ravel()
+        else:
+            flat = np.concatenate(faces)
+    if flat.size and (flat.min() < 0 or flat.max() >= n):
+        raise ValueError(f"faces index vertices {int(flat.min())}..{int(flat.max())}, outside 0..{n - 1}")
+    return faces
+
+
+def _index_list(face) -> np.ndarray:
+    """One face as an integer array; object arrays of integers (np.load of an old faces.npy) are
+    accepted when every entry is a whole number."""
+    face = np.asarray(face)
+    if face.dtype == object:
+        try:
+            as_int = face.astype(np.int64)
+        except (TypeError, ValueError):
+            raise ValueError("faces must be integer index lists") from None
+        if not np.array_equal(as_int, face):
+            raise ValueError("faces must be integer index lists")
+        face = as_int
+    return face

@@ -1,0 +1,204 @@
+"""XYZ and PTS: whitespace-separated text, one point a line.
+
+.xyz  x y z [nx ny nz] [more columns]. A first line "# x y z nx ny nz red:u1 ..." (what write_xyz
+      puts there when the scan has attributes) names the columns and gives their dtypes;
+      without it, columns 4-6 are normals when every row of them has unit length, and other
+      columns are kept as float64 attributes column_3, column_4, ...
+.pts  a first line with the point count, then x y z [intensity] [r g b] (Leica/Faro style):
+      4 columns are intensity, 6 are colour, 7 are both.
+Coordinates are written with %.17g, which float64 reads back exactly.
+"""
+from __future__ import annotations
+
+import io
+import os
+import warnings
+
+import numpy as np
+
+from .atomic import atomic_write
+from .scan import Scan
+
+_HEADER_MARK = "#"
+_PTS_COLUMNS = {3: (), 4: ("intensity",), 6: ("red", "green", "blue"), 7: ("intensity", "red", "green", "blue")}
+
+
+def read_xyz(path) -> Scan:
+    path = os.fspath(path)
+    header, rows = _load(path, skip_first=False)
+    if header is not None:
+        names, dtypes = _parse_header(header, rows.shape[1], path)
+    else:
+        names, dtypes = _guess_xyz_columns(rows)
+    return _scan(path, rows, names, dtypes, {"format": "xyz", "header": header is not None})
+
+
+def read_pts(path) -> Scan:
+    path = os.fspath(path)
+    first, rows = _load(path, skip_first=True)
+    try:
+        count = int(first.split()[0])
+    except (ValueError, IndexError, AttributeError):
+        raise ValueError(f"{path}: a .pts file starts with its point count, got {first!r}") from None
+    if count != len(rows):
+        raise ValueError(f"{path}: the first line says {count} points, the file has {len(rows)} (truncated?)")
+    extra = _PTS_COLUMNS.get(rows.shape[1])
+    if extra is None:
+        raise ValueError(f"{path}: .pts rows have 3, 4, 6 or 7 columns, got {rows.shape[1]}")
+    names = ["x", "y", "z", *extra]
+    dtypes = ["f8"] * 3 + [_integer_dtype(rows[:, 3 + i], name) for i, name in enumerate(extra)]
+    return _scan(path, rows, names, dtypes, {"format": "pts"})
+
+
+def write_xyz(path, scan: Scan) -> None:
+    names, columns, formats = _columns(scan, normals=True)
+    header = None
+    if len(names) > (6 if scan.normals is not None else 3):
+        header = " ".join(f"{n}:{c.dtype.str.lstrip('<>=|')}" if i >= 3 else n
+                          for i, (n, c) in enumerate(zip(names, columns)))
+    _write(path, np.column_stack(columns) if columns else None, formats, header=header, count=None)
+
+
+def write_pts(path, scan: Scan) -> None:
+    columns = [scan.points[:, i] for i in range(3)]
+    formats = ["%.17g"] * 3
+    if "intensity" in scan.vertex_attributes:
+        columns.append(scan.vertex_attributes["intensity"])
+        formats.append(_format(scan.vertex_attributes["intensity"]))
+    if all(c in scan.vertex_attributes for c in ("red", "green", "blue")):
+        for c in ("red", "green", "blue"):
+            columns.append(scan.vertex_attributes[c])
+            formats.append(_format(scan.vertex_attributes[c]))
+    kept = {"intensity", "red", "green", "blue"}
+    dropped = [n for n in scan.vertex_attributes if n not in kept] + (["normals"] if scan.normals is not None else [])
+    if dropped:
+        warnings.warn(f"{path}: .pts has no room for {', '.join(dropped)}; not written", stacklevel=3)
+    _write(path, np.column_stack(columns), formats, header=None, count=scan.n_points)
+
+
+# -- helpers ----------------------------------------------------------------------------------
+
+def _load(path: str, skip_first: bool):
+    """(the first line when it is a header or count line, rows (n, c) float64)."""
+    if not os.path.isfile(path):
+        raise ValueError(f"no such file: {path}")
+    try:
+        with open(path, "r", encoding="utf-8", errors="strict") as f:
+            first = f.readline()
+            header = None
+            if skip_first:
+                header = first
+            elif first.lstrip().startswith((_HEADER_MARK, "//")):
+                header = first.lstrip().lstrip("#/").strip()
+            else:
+                f.seek(0)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # "input contained no data": reported below as no vertices
+                rows = np.loadtxt(f, dtype=np.float64, ndmin=2, comments=None if skip_first else "#")
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a text file") from None
+    except ValueError as exc:
+        raise ValueError(f"{path}: unreadable row ({_first_line(exc)})") from None
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read ({exc})") from None
+    if rows.size == 0:
+        raise ValueError(f"{path}: no vertices")
+    if rows.shape[1] < 3:
+        raise ValueError(f"{path}: rows need at least x y z, got {rows.shape[1]} columns")
+    return header, rows
+
+
+def _parse_header(header: str, ncols: int, path: str):
+    tokens = header.replace(",", " ").split()
+    if len(tokens) != ncols:
+        raise ValueError(f"{path}: the header names {len(tokens)} columns, the rows have {ncols}")
+    names, dtypes = [], []
+    for token in tokens:
+        name, _, dtype = token.partition(":")
+        names.append(name.lower() if name.lower() in ("x", "y", "z", "nx", "ny", "nz") else name)
+        try:
+            dtypes.append(np.dtype(dtype or "f8").str)
+        except TypeError:
+            raise ValueError(f"{path}: header column {token!r} has an unknown dtype") from None
+    if names[:3] != ["x", "y", "z"]:
+        raise ValueError(f"{path}: the header must start with x y z, got {' '.join(tokens[:3])}")
+    return names, dtypes
+
+
+def _guess_xyz_columns(rows: np.ndarray):
+    ncols = rows.shape[1]
+    names = ["x", "y", "z"]
+    if ncols >= 6 and np.all(np.abs(np.linalg.norm(rows[:, 3:6], axis=1) - 1) < 1e-3):
+        names += ["nx", "ny", "nz"]
+    names += [f"column_{i}" for i in range(len(names), ncols)]
+    return names, ["f8"] * ncols
+
+
+def _scan(path, rows, names, dtypes, info) -> Scan:
+    points = rows[:, :3]
+    if not np.isfinite(points).all():
+        raise ValueError(f"{path}: {int((~np.isfinite(points).all(axis=1)).sum())} points have non-finite coordinates")
+    normals = rows[:, 3:6] if names[3:6] == ["nx", "ny", "nz"] else None
+    attributes = {}
+    for i, (name, dtype) in enumerate(zip(names, dtypes)):
+        if name in ("x", "y", "z") or (normals is not None and name in ("nx", "ny", "nz")):
+            continue
+        values = rows[:, i]
+        dtype = np.dtype(dtype)
+        if dtype.kind in "iub" and not np.array_equal(values, np.round(values)):
+            raise ValueError(f"{path}: column {name} is declared {dtype} but holds fractions")
+        attributes[name] = values.astype(dtype)
+    try:
+        return Scan(points=points, precision=np.float64, normals=normals, vertex_attributes=attributes,
+                    format_info=info)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
+
+
+def _integer_dtype(values: np.ndarray, name: str) -> str:
+    """PTS intensity and colours are integers (colours 0..255) in most files; floats are kept."""
+    if not np.array_equal(values, np.round(values)):
+        return "f8"
+    if name in ("red", "green", "blue") and values.min() >= 0 and values.max() <= 255:
+        return "u1"
+    return "i4"
+
+
+def _columns(scan: Scan, normals: bool):
+    names, columns, formats = ["x", "y", "z"], [scan.points[:, i] for i in range(3)], ["%.17g"] * 3
+    if normals and scan.normals is not None:
+        names += ["nx", "ny", "nz"]
+        columns += [scan.normals[:, i] for i in range(3)]
+        formats += ["%.17g"] * 3
+    for name, values in scan.vertex_attributes.items():
+        values = np.asarray(values)
+        if values.ndim == 2:  # (n, c): one column each, name_0 .. name_{c-1}
+            for j in range(values.shape[1]):
+                names.append(f"{name}_{j}")
+                columns.append(values[:, j])
+                formats.append(_format(values))
+        else:
+            names.append(name)
+            columns.append(values)
+            formats.append(_format(values))
+    return names, columns, formats
+
+
+def _format(values: np.ndarray) -> str:
+    return "%d" if np.asarray(values).dtype.kind in "iub" else "%.17g"
+
+
+def _write(path: str, rows: np.ndarray, formats: list, header: str | None, count: int | None) -> None:
+    buffer = io.StringIO()
+    if count is not None:
+        buffer.write(f"{count}\n")
+    if header is not None:
+        buffer.write(f"{_HEADER_MARK} {header}\n")
+    np.savetxt(buffer, rows, fmt=formats, delimiter=" ")
+    with atomic_write(path) as temporary:
+        with open(temporary, "w", encoding="utf-8") as f:
+            f.write(buffer.getvalue())
+
+
+def _first_line(exc: Exception) -> str:
+    return str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__

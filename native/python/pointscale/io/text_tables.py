@@ -1,0 +1,49 @@
+"""Shared pieces of the text mesh readers and writers (OBJ, OFF): fast number parsing, faces."""
+from __future__ import annotations
+
+import io
+
+import numpy as np
+
+
+def numbers(lines: list[str], what: str, path: str) -> np.ndarray:
+    """The lines as (len(lines), w) float64 when they all have w numbers, else ValueError."""
+    if not lines:
+        return np.zeros((0, 3))
+    tokens = " ".join(lines).split()
+    width = len(lines[0].split())
+    if width == 0 or len(tokens) != width * len(lines):
+        widths = sorted({len(line.split()) for line in lines})
+        raise ValueError(f"{path}: {what} lines have differing numbers of values {widths} (truncated?)")
+    try:
+        return np.array(tokens, dtype=np.float64).reshape(len(lines), width)
+    except ValueError:
+        raise ValueError(f"{path}: {what} lines hold something that is not a number") from None
+
+
+def polygons(lengths: np.ndarray, flat: np.ndarray):
+    """Faces as (m, k) when all have k corners, else a list of arrays (mixed polygons)."""
+    if len(lengths) and (lengths == lengths[0]).all():
+        return flat.reshape(len(lengths), int(lengths[0]))
+    return np.split(flat, np.cumsum(lengths)[:-1])
+
+
+def face_rows(faces) -> tuple[np.ndarray, np.ndarray]:
+    """(lengths (m,), flat indices) of (m, k) faces or a list of index arrays."""
+    if isinstance(faces, np.ndarray):
+        return np.full(len(faces), faces.shape[1]), faces.ravel()
+    return np.array([len(f) for f in faces]), np.concatenate(faces) if faces else np.zeros(0, np.int64)
+
+
+def savetxt(buffer: io.StringIO, prefix: str, columns: np.ndarray, fmt: str) -> None:
+    """Rows of columns, each line starting with prefix (e.g. "v "), formatted with fmt per value."""
+    if len(columns):
+        np.savetxt(buffer, columns, fmt=prefix + " ".join([fmt] * columns.shape[1]))
+
+
+def colour_for_text(values: np.ndarray) -> np.ndarray:
+    """Colours as 0..1 floats for OBJ: 8- and 16-bit integers are divided by 255 or 65535."""
+    values = np.asarray(values)
+    if values.dtype.kind in "ui":
+        return values / float(np.iinfo(values.dtype).max)
+    return values.astype(np.float64)
