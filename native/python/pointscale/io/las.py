@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+import struct
 import warnings
 
 import numpy as np
@@ -28,6 +29,7 @@ NORMAL_NAMES = ("nx", "ny", "nz")
 # Written by laspy itself from the point format and the compression: never copied.
 _MANAGED_VLRS = {("LASF_Spec", 4), ("laszip encoded", 22204)}
 _COLOURS = ("red", "green", "blue")
+_CHUNK_POINTS = 1 << 20
 
 
 def _laspy():
@@ -45,10 +47,8 @@ def read_las(path) -> Scan:
     if not os.path.isfile(path):
         raise ValueError(f"no such file: {path}")
     try:
-        las = laspy.read(path)
-        count = int(las.header.point_count)
-        if len(las.points) != count:
-            raise ValueError(f"the header says {count} points, the file holds {len(las.points)} (truncated?)")
+        las = _read_records(laspy, path)
+        count = len(las.points)
         points = np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)]).astype(np.float64)
         extra = {d.name: d for d in las.point_format.extra_dimensions}
         attributes = {name: np.array(las[name]) for name in las.point_format.dimension_names
@@ -73,6 +73,58 @@ def read_las(path) -> Scan:
                     format_info=info)
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
+
+
+def _read_records(laspy, path: str):
+    """laspy.read, but in chunks and with lazrs's sequential decoder, so that a damaged header's
+    point count cannot make anything allocate memory for it: lazrs's parallel decoder sizes one
+    buffer by the count and aborts the process (not an exception) when that fails."""
+    with laspy.open(path, laz_backend=laspy.LazBackend.Lazrs) as reader:
+        header = reader.header
+        count = int(header.point_count)
+        if header.are_points_compressed:
+            _check_chunk_table(path, int(header.offset_to_point_data))
+        else:
+            room = os.path.getsize(path) - int(header.offset_to_point_data)
+            if count * header.point_format.size > room:
+                raise ValueError(f"the header says {count} points, the file holds {max(room, 0) // header.point_format.size}"
+                                 " (truncated?)")
+        arrays, done = [], 0
+        while done < count:
+            chunk = reader.read_points(min(_CHUNK_POINTS, count - done))
+            if len(chunk) == 0:
+                break
+            arrays.append(chunk.array)
+            done += len(chunk)
+        if done != count:
+            raise ValueError(f"the header says {count} points, the file holds {done} (truncated?)")
+        dtype = header.point_format.dtype()
+        records = np.concatenate(arrays) if arrays else np.zeros(0, dtype=dtype)
+        points = laspy.ScaleAwarePointRecord(records, header.point_format, header.scales, header.offsets)
+        return laspy.LasData(header=header, points=points)
+
+
+def _check_chunk_table(path: str, start: int) -> None:
+    """Refuses a LAZ chunk table that lazrs would size a buffer by without looking (a damaged
+    count makes it allocate up to 64 GB and abort the process). The table's offset is the first
+    8 bytes of the point data (or, when those are -1, the last 8 of the file); the table starts
+    with a version and the number of chunks, each of which takes at least one byte of the file."""
+    with open(path, "rb") as f:
+        size = os.fstat(f.fileno()).st_size
+        f.seek(start)
+        raw = f.read(8)
+        if len(raw) < 8:
+            raise ValueError("truncated LAZ point data")
+        offset = int.from_bytes(raw, "little", signed=True)
+        if offset == -1:
+            f.seek(max(size - 8, 0))
+            offset = int.from_bytes(f.read(8), "little", signed=True)
+        if not start + 8 <= offset <= size - 8:
+            raise ValueError(f"damaged LAZ chunk table offset {offset} in a {size}-byte file (truncated?)")
+        f.seek(offset)
+        _version, chunks = struct.unpack("<II", f.read(8))
+        if chunks > size - start:
+            raise ValueError(f"damaged LAZ chunk table ({chunks} chunks in a {size}-byte file)")
 
 
 def write_las(path, scan: Scan) -> None:

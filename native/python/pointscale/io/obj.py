@@ -20,7 +20,7 @@ import numpy as np
 
 from .atomic import atomic_write
 from .scan import Scan
-from .text_tables import colour_for_text, numbers, polygons, savetxt
+from .text_tables import colour_for_text, numbers, polygons, savetxt, write_rows
 
 _COLOURS = ("red", "green", "blue")
 _UV_NAMES = (("texture_u", "texture_v"), ("s", "t"), ("u", "v"))
@@ -82,7 +82,7 @@ def write_obj(path, scan: Scan) -> None:
                         (True, True): ("%d/%d/%d", 3)}[(uv_names is not None, scan.normals is not None)]
         if isinstance(scan.faces, np.ndarray):
             rows = np.repeat(scan.faces + 1, refs, axis=1)
-            np.savetxt(buffer, rows, fmt="f " + " ".join([corner] * scan.faces.shape[1]))
+            write_rows(buffer, rows, "f " + " ".join([corner] * scan.faces.shape[1]))
         else:
             for face in scan.faces:
                 buffer.write("f " + " ".join(corner % ((i + 1,) * refs) for i in face) + "\n")

@@ -15,7 +15,7 @@ import numpy as np
 
 from .atomic import atomic_write
 from .scan import Scan
-from .text_tables import face_rows, numbers, polygons
+from .text_tables import face_rows, numbers, polygons, write_rows
 
 _COLOUR_NAMES = ("red", "green", "blue", "alpha")
 
@@ -70,7 +70,7 @@ def write_off(path, scan: Scan) -> None:
         keyword = "C" + keyword
     buffer = io.StringIO()
     buffer.write(f"{keyword}\n{scan.n_points} {scan.n_faces} 0\n")
-    np.savetxt(buffer, np.column_stack(columns), fmt=formats)
+    write_rows(buffer, np.column_stack(columns), " ".join(formats))
     if scan.n_faces:
         lengths, flat = face_rows(scan.faces)
         face_colours = _colour_columns(scan.face_attributes)
@@ -81,7 +81,7 @@ def write_off(path, scan: Scan) -> None:
             if face_colours is not None:
                 rows.append(face_colours)
             fmt = " ".join(["%d"] * (1 + scan.faces.shape[1])) + colour_fmt
-            np.savetxt(buffer, np.column_stack(rows), fmt=fmt)
+            write_rows(buffer, np.column_stack(rows), fmt)
         else:
             for i, face in enumerate(scan.faces):
                 line = f"{len(face)} " + " ".join(str(int(j)) for j in face)

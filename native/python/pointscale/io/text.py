@@ -18,6 +18,7 @@ import numpy as np
 
 from .atomic import atomic_write
 from .scan import Scan
+from .text_tables import write_rows
 
 _HEADER_MARK = "#"
 _PTS_COLUMNS = {3: (), 4: ("intensity",), 6: ("red", "green", "blue"), 7: ("intensity", "red", "green", "blue")}
@@ -194,7 +195,7 @@ def _write(path: str, rows: np.ndarray, formats: list, header: str | None, count
         buffer.write(f"{count}\n")
     if header is not None:
         buffer.write(f"{_HEADER_MARK} {header}\n")
-    np.savetxt(buffer, rows, fmt=formats, delimiter=" ")
+    write_rows(buffer, rows, " ".join(formats))
     with atomic_write(path) as temporary:
         with open(temporary, "w", encoding="utf-8") as f:
             f.write(buffer.getvalue())
