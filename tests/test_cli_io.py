@@ -330,3 +330,24 @@ def test_scanned_bunny_round_trips():
     model = read_ply(shared_model("bunny.ply"))
     dec = ps.decompose(model.points, levels=4)
     assert np.abs(ps.reconstruct(dec) - model.points).max() <= 1e-6 * diagonal(model.points)
+
+
+@pytest.mark.parametrize("extension", [".ply", ".las", ".laz", ".obj", ".off", ".stl", ".xyz", ".pts", ".e57"])
+def test_a_truncated_input_of_any_format_is_one_clear_line(tmp_path, extension):
+    if extension == ".e57":
+        pytest.importorskip("pye57", reason="E57 needs pye57 (pip install pye57)")
+    mesh = extension in (".ply", ".obj", ".off", ".stl")
+    points = ellipsoid_with_bumps(3000, seed=11)
+    faces = np.random.default_rng(4).integers(0, len(points), (2000, 3)) if mesh else None
+    io.write(tmp_path / f"in{extension}", io.Scan(points=points, faces=faces))
+    data = (tmp_path / f"in{extension}").read_bytes()
+    cut = len(data) * 2 // 5
+    if extension in (".obj", ".xyz"):
+        # A text file cut between two lines is a valid, shorter file; cut inside a line, after
+        # its first number, as a copy that stopped half-way does.
+        line = data.rindex(b"\n", 0, cut) + 1
+        cut = data.index(b" ", line + 2) if extension == ".obj" else data.index(b" ", line)
+    (tmp_path / f"cut{extension}").write_bytes(data[:cut])
+    msg = one_line_error(run("decompose", str(tmp_path / f"cut{extension}"), "-o", str(tmp_path / "out")))
+    assert f"cut{extension}" in msg
+    assert not (tmp_path / "out").exists()

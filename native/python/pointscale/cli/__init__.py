@@ -20,8 +20,19 @@ def _one_line(text: str) -> str:
     return lines[0] if lines else ""
 
 
+_warned = set()
+
+
 def _show_warning(message, category, filename, lineno, file=None, line=None):
-    print(f"pointscale: warning: {_one_line(message)}", file=sys.stderr)
+    """One line per warning. A writer's warning names the (temporary) file it was writing; the
+    same warning for every level is shown once, without the name."""
+    text = _one_line(message)
+    head, _, rest = text.partition(": ")
+    if rest and ("/" in head or "\\" in head or "." in head):
+        text = rest
+    if text not in _warned:
+        _warned.add(text)
+        print(f"pointscale: warning: {text}", file=sys.stderr)
 
 
 def main(argv=None) -> int:

@@ -106,10 +106,11 @@ def cmd_decompose(args) -> None:
             writers.submit(lambda: np.savez(source_tmp, **scan.to_arrays()))
             level_tmp = [staged.temporary(out / level_name(l, extension)) for l in range(k + 1)]
             for l in range(k):
-                writers.submit(lambda l=l: io.write(level_tmp[l], level_scan(scan, levels[l], normals[l], dec.details[l])))
+                writers.submit(lambda l=l: io.write(level_tmp[l], level_scan(scan, levels[l], normals[l],
+                                                                             dec.details[l], extension)))
             # The finest level's normals are computed while the other files are written.
             normals.append(finest_normals(levels[k], normals[k - 1], args.threads))
-            writers.submit(lambda: io.write(level_tmp[k], level_scan(scan, levels[k], normals[k], None)))
+            writers.submit(lambda: io.write(level_tmp[k], level_scan(scan, levels[k], normals[k], None, extension)))
             writers.wait()
         written = {out / DECOMPOSITION_FILE, out / SOURCE_FILE} | {out / level_name(l, extension) for l in range(k + 1)}
         staged.commit(remove_first=[p for p in earlier if p not in written])
@@ -141,7 +142,7 @@ def cmd_reconstruct(args) -> None:
         template = source if source is not None else io.Scan(points=points)
         tmp = staged.temporary(out)
         with _Writers(progress, "writing", expected=1) as writers:
-            writers.submit(lambda: io.write(tmp, level_scan(template, points, normals, None)))
+            writers.submit(lambda: io.write(tmp, level_scan(template, points, normals, None, out.suffix.lower())))
             writers.wait()
         staged.commit()
     print(f"wrote {out} ({dec.n_points} points, gains {args.gains or 'all 1'}"
@@ -168,7 +169,7 @@ def cmd_demo(args) -> None:
     for l in range(dec.n_levels):
         normals = dec.normals(l) if l < dec.n_bands else finest_normals(points, dec.normals(l - 1), 0)
         detail = dec.details[l] if l < dec.n_bands else None
-        io.write(out / level_name(l, ".ply"), level_scan(template, dec.level(l), normals, detail))
+        io.write(out / level_name(l, ".ply"), level_scan(template, dec.level(l), normals, detail, ".ply"))
     error = np.abs(reconstruct(dec) - points).max() / np.linalg.norm(np.ptp(points, axis=0))
     print(f"exact reconstruction: max error {error:.2e} of the bounding-box diagonal")
     for gains in ((1, 1, 0), (1, 1, 2), (0, 0, 1)):

@@ -37,11 +37,15 @@ def detail_attribute_name(scan) -> str:
     return "detail" if "detail" not in scan.vertex_attributes else "pointscale_detail"
 
 
-def level_scan(template, points: np.ndarray, normals: np.ndarray, detail):
+# Formats with room for a vertex scalar of our own; the others would drop the detail with a warning.
+FORMATS_WITH_VERTEX_SCALARS = (".ply", ".las", ".laz", ".xyz")
+
+
+def level_scan(template, points: np.ndarray, normals: np.ndarray, detail, extension: str):
     """`template`'s faces and attributes on new geometry, plus the band's detail as a vertex
-    scalar when given (the finest level has none)."""
+    scalar when given (the finest level has none) and the format `extension` can hold it."""
     scan = template.with_geometry(points, normals)
-    if detail is not None:
+    if detail is not None and extension in FORMATS_WITH_VERTEX_SCALARS:
         dtype = np.float64 if np.dtype(template.precision) == np.float64 else np.float32
         scan.vertex_attributes[detail_attribute_name(template)] = np.asarray(detail, dtype=dtype)
     return scan
