@@ -285,6 +285,30 @@ def test_scan_from_elsewhere_written_as_las(tmp_path):
     assert np.abs(back.normals - scan.normals).max() < 1e-6  # extra bytes nx, ny, nz in float32
 
 
+def test_las14_evlr_survives(tmp_path):
+    import laspy
+    from laspy.vlrs.vlrlist import VLRList
+    las = laspy.LasData(laspy.LasHeader(point_format=6, version="1.4"))
+    las.header.scales, las.header.offsets = [1e-3] * 3, [0, 0, 0]
+    las.x, las.y, las.z = np.arange(10.0), np.arange(10.0) * 2, np.arange(10.0) * 3
+    las.evlrs = VLRList([laspy.VLR(user_id="pointscale", record_id=9, description="evlr",
+                                   record_data=bytes(range(256)) * 300)])  # larger than a VLR may be
+    las.write(str(tmp_path / "in.las"))
+    io.write(tmp_path / "out.laz", io.read(tmp_path / "in.las"))
+    evlrs = laspy.read(str(tmp_path / "out.laz")).header.evlrs
+    assert len(evlrs) == 1 and evlrs[0].record_id == 9 and evlrs[0].record_data == bytes(range(256)) * 300
+
+
+def test_big_endian_ply_round_trips_byte_for_byte(tmp_path):
+    vertex = np.zeros(3, dtype=[("x", ">f4"), ("y", ">f4"), ("z", ">f4"), ("q", ">u2")])
+    vertex["x"], vertex["q"] = [1.5, 2.5, -3.0], [1, 2, 300]
+    PlyData([PlyElement.describe(vertex, "vertex")], byte_order=">").write(str(tmp_path / "be.ply"))
+    scan = io.read(tmp_path / "be.ply")
+    assert scan.vertex_attributes["q"].dtype == np.uint16 and scan.vertex_attributes["q"].tolist() == [1, 2, 300]
+    io.write(tmp_path / "again.ply", scan)
+    assert (tmp_path / "again.ply").read_bytes() == (tmp_path / "be.ply").read_bytes()
+
+
 # -- OBJ, OFF, STL, XYZ, PTS ---------------------------------------------------------------------
 
 def test_obj_round_trip_keeps_order_normals_colours_uvs(tmp_path):
@@ -365,6 +389,9 @@ def test_xyz_round_trip_keeps_normals_and_named_columns(tmp_path):
     plain = io.read(tmp_path / "b.xyz")
     assert np.array_equal(plain.points, scan.points) and plain.normals is not None
     assert np.array_equal(plain.vertex_attributes["column_6"], np.arange(700.0))
+    # a first comment that does not name the columns is only a comment
+    (tmp_path / "c.xyz").write_text("# exported by some scanner\n1 2 3\n4 5 6\n")
+    assert io.read(tmp_path / "c.xyz").points.tolist() == [[1, 2, 3], [4, 5, 6]]
 
 
 def test_pts_round_trip_keeps_intensity_and_colour(tmp_path):

@@ -157,8 +157,9 @@ def write_las(path, scan: Scan) -> None:
         if "global_encoding" in info:
             header.global_encoding.value = int(info["global_encoding"])
         header.vlrs.extend(_vlr(laspy, v) for v in info.get("vlrs", []))
+        from laspy.vlrs.vlrlist import VLRList
         if info.get("evlrs"):
-            header.evlrs = laspy.VLRList(_vlr(laspy, v) for v in info["evlrs"])
+            header.evlrs = VLRList(_vlr(laspy, v) for v in info["evlrs"])
         las = laspy.LasData(header)
         las.x, las.y, las.z = scan.points[:, 0], scan.points[:, 1], scan.points[:, 2]
         for name, column in values.items():

@@ -103,9 +103,9 @@ def _lines(path: str) -> dict:
         raise ValueError(f"{path}: cannot read ({exc})") from None
     lines = {"v": [], "vt": [], "vn": [], "f": []}
     for line in text.splitlines():
-        key, _, rest = line.strip().partition(" ")
-        if key in lines:
-            lines[key].append(rest.split("#", 1)[0])
+        parts = line.split(None, 1)
+        if parts and parts[0] in lines:
+            lines[parts[0]].append(parts[1].split("#", 1)[0] if len(parts) > 1 else "")
     return lines
 
 

@@ -145,7 +145,8 @@ def _properties(element, skip: set, list_lengths: dict, path: str, prefix: str =
                               stacklevel=4)
                 continue
             list_lengths[prefix + p.name] = _code(p.len_dtype)
-        out[p.name] = np.array(values)  # a copy: the element may be a memory map of the file
+        # A copy in native byte order: the element may be a memory map of a big-endian file.
+        out[p.name] = np.array(values, dtype=np.asarray(values).dtype.newbyteorder("="))
     return out
 
 
@@ -234,6 +235,8 @@ def _ordered(columns: dict, order: list) -> dict:
 
 def _ply_values(name: str, values: np.ndarray) -> np.ndarray:
     """values in a dtype PLY has: bool -> uint8, 64-bit integers -> 32-bit when they fit."""
+    if not name or any(c.isspace() for c in name) or not name.isascii():
+        raise ValueError(f"attribute name {name!r} cannot be a PLY property name (ASCII without spaces)")
     values = np.asarray(values)
     dtype = values.dtype.newbyteorder("=")
     if dtype in _PLY_DTYPES:

@@ -261,8 +261,8 @@ def _faces(faces, n: int):
     if faces is None:
         return None
     if isinstance(faces, np.ndarray) and faces.dtype.kind != "O":
-        if faces.ndim != 2 or (faces.size and faces.dtype.kind not in "iu"):
-            raise ValueError(f"faces must be an (m, k) integer array, got {faces.shape} {faces.dtype}")
+        if faces.ndim != 2 or (faces.size and faces.dtype.kind not in "iu") or (len(faces) and faces.shape[1] < 3):
+            raise ValueError(f"faces must be an (m, k >= 3) integer array, got {faces.shape} {faces.dtype}")
         faces = faces.astype(np.int64, copy=False)
         flat = faces.ravel()
     else:

@@ -1,8 +1,9 @@
 """XYZ and PTS: whitespace-separated text, one point a line.
 
 .xyz  x y z [nx ny nz] [more columns]. A first line "# x y z nx ny nz red:u1 ..." (what write_xyz
-      puts there when the scan has attributes) names the columns and gives their dtypes;
-      without it, columns 4-6 are normals when every row of them has unit length, and other
+      puts there when the scan has attributes; "//X Y Z R G B" from CloudCompare works too)
+      names the columns and gives their dtypes; without it (or when the first comment does not
+      name every column, starting with x y z), columns 4-6 are normals when every row of them has unit length, and other
       columns are kept as float64 attributes column_3, column_4, ...
 .pts  a first line with the point count, then x y z [intensity] [r g b] (Leica/Faro style):
       4 columns are intensity, 6 are colour, 7 are both.
@@ -27,11 +28,12 @@ _PTS_COLUMNS = {3: (), 4: ("intensity",), 6: ("red", "green", "blue"), 7: ("inte
 def read_xyz(path) -> Scan:
     path = os.fspath(path)
     header, rows = _load(path, skip_first=False)
-    if header is not None:
+    names_given = header is not None and _names_columns(header, rows.shape[1])
+    if names_given:
         names, dtypes = _parse_header(header, rows.shape[1], path)
-    else:
+    else:  # no header, or a first comment that does not name the columns
         names, dtypes = _guess_xyz_columns(rows)
-    return _scan(path, rows, names, dtypes, {"format": "xyz", "header": header is not None})
+    return _scan(path, rows, names, dtypes, {"format": "xyz", "header": bool(names_given)})
 
 
 def read_pts(path) -> Scan:
@@ -107,6 +109,12 @@ def _load(path: str, skip_first: bool):
     if rows.shape[1] < 3:
         raise ValueError(f"{path}: rows need at least x y z, got {rows.shape[1]} columns")
     return header, rows
+
+
+def _names_columns(header: str, ncols: int) -> bool:
+    """Whether a first comment line names the columns: as many words as columns, from x y z."""
+    tokens = header.replace(",", " ").split()
+    return len(tokens) == ncols and [t.partition(":")[0].lower() for t in tokens[:3]] == ["x", "y", "z"]
 
 
 def _parse_header(header: str, ncols: int, path: str):
