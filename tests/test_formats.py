@@ -431,25 +431,31 @@ def test_e57_without_pye57_says_how_to_install(tmp_path, monkeypatch):
 
 # -- damaged input --------------------------------------------------------------------------------
 
-def _write_sample(path):
+def _write_sample(path, ascii_ply=False):
     points, faces = triangle_mesh(3)
     scan = coloured_scan(len(points))
     if path.suffix in (".ply", ".obj", ".off", ".stl"):
         scan = Scan(points=points, faces=faces, vertex_attributes=scan.vertex_attributes)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        io.write(path, scan)
+        if ascii_ply:
+            from pointscale.io.ply import write_ply
+            write_ply(path, scan, binary=False)
+        else:
+            io.write(path, scan)
 
 
 FORMATS = [".ply", ".las", ".laz", ".obj", ".off", ".stl", ".xyz", ".pts", ".e57"]
 
 
-@pytest.mark.parametrize("ext", FORMATS)
+@pytest.mark.parametrize("ext", FORMATS + ["ascii.ply"])
 def test_truncated_file_is_a_clear_error(tmp_path, ext):
     if ext == ".e57":
         pytest.importorskip("pye57")
+    ascii_ply = ext == "ascii.ply"
+    ext = ".ply" if ascii_ply else ext
     path = tmp_path / f"a{ext}"
-    _write_sample(path)
+    _write_sample(path, ascii_ply)
     data = path.read_bytes()
     for keep in (0.6, 0.97):
         cut = tmp_path / f"cut_{keep}{ext}"

@@ -14,6 +14,7 @@ import numpy as np
 from plyfile import PlyData, PlyElement, PlyListProperty
 
 from .atomic import atomic_write
+from .ply_ascii import read_ascii, write_ascii
 from .scan import Scan
 
 COORDINATES = ("x", "y", "z")
@@ -48,15 +49,17 @@ def write_ply(path, scan: Scan, binary: bool | None = None) -> None:
     elements = [_vertex_element(scan, info)]
     if scan.n_faces:
         elements.append(_face_element(scan, info))
-    ply = PlyData([e for e, _ in elements], text=text, byte_order=byte_order,
+    ply = PlyData([e for e, _, _ in elements], text=text, byte_order=byte_order,
                   comments=list(info.get("comments", [])), obj_info=list(info.get("obj_info", [])))
     with atomic_write(path) as temporary:
-        if text or any(packed is None for _, packed in elements):
-            ply.write(str(temporary))  # ASCII, or ragged polygons: plyfile's own row-by-row writer
+        if text:
+            write_ascii(temporary, ply, [columns for _, _, columns in elements])
+        elif any(packed is None for _, packed, _ in elements):
+            ply.write(str(temporary))  # binary with ragged polygons: plyfile's own row-by-row writer
         else:
             with open(temporary, "wb") as f:
                 f.write(ply.header.encode("ascii") + b"\n")
-                for _, packed in elements:
+                for _, packed, _ in elements:
                     f.write(packed(byte_order).data)
 
 
@@ -65,6 +68,9 @@ def write_ply(path, scan: Scan, binary: bool | None = None) -> None:
 def _parse(path: str) -> PlyData:
     if not os.path.isfile(path):
         raise ValueError(f"no such file: {path}")
+    fast = read_ascii(path)
+    if fast is not None:
+        return fast
     try:
         try:
             return PlyData.read(path, known_list_len=_TRIANGLE_LISTS)
@@ -196,7 +202,8 @@ def _face_element(scan: Scan, info: dict):
 
 
 def _element(name: str, columns: dict, list_lengths: dict, val_types=None):
-    """(PlyElement for the header, packer of the binary records or None when lists are ragged)."""
+    """(PlyElement for the header, packer of the binary records or None when lists are ragged,
+    the columns themselves for the ASCII writer)."""
     count = len(next(iter(columns.values())))
     ragged = any(v.dtype == object for v in columns.values())
     fields = [(k, object) if v.dtype == object else (k, v.dtype, v.shape[1:]) for k, v in columns.items()]
@@ -223,7 +230,7 @@ def _element(name: str, columns: dict, list_lengths: dict, val_types=None):
             records[k] = v
         return records
 
-    return element, (None if ragged else packed)
+    return element, (None if ragged else packed), columns
 
 
 def _ordered(columns: dict, order: list) -> dict:
