@@ -1,6 +1,7 @@
 """pointscale.io: every format round-trips what it stores, and damaged input is a clear ValueError."""
 import os
 import pickle
+import struct
 import warnings
 
 import numpy as np
@@ -214,6 +215,10 @@ def test_shared_scans_keep_scan_id(tmp_path):
 
 # -- LAS / LAZ ------------------------------------------------------------------------------------
 
+# A GeoTIFF key directory with one key (GTModelTypeGeoKey = projected): where a LAS file's CRS lives.
+GEOKEYS = struct.pack("<8H", 1, 1, 0, 1, 1024, 0, 1, 1)
+
+
 def _laspy_file(path, n=500):
     """A LAS 1.2 point format 3 file written by laspy: scale 1e-3, offsets near UTM, every field
     set, two extra dimensions and a VLR; returns the LasData written."""
@@ -225,6 +230,8 @@ def _laspy_file(path, n=500):
     header.add_extra_dim(laspy.ExtraBytesParams(name="scan_id", type=np.uint16))
     header.vlrs.append(laspy.VLR(user_id="pointscale", record_id=7, description="test vlr",
                                  record_data=b"\x00\x01CRS lives here\xff"))
+    header.vlrs.append(laspy.VLR(user_id="LASF_Projection", record_id=34735, description="GeoKeyDirectoryTag",
+                                 record_data=GEOKEYS))
     las = laspy.LasData(header)
     rng = np.random.default_rng(3)
     las.x = 500000 + rng.random(n) * 300
@@ -261,6 +268,8 @@ def test_las_round_trip_keeps_header_fields_and_vlrs(tmp_path, ext):
         assert np.array_equal(np.asarray(written[name]), np.asarray(original[name])), name
     vlrs = [v for v in written.header.vlrs if v.user_id == "pointscale"]
     assert len(vlrs) == 1 and vlrs[0].record_id == 7 and vlrs[0].record_data == b"\x00\x01CRS lives here\xff"
+    crs = [v for v in written.header.vlrs if v.record_id == 34735]
+    assert len(crs) == 1 and crs[0].record_data_bytes() == GEOKEYS
     assert list(written.point_format.extra_dimension_names) == ["quality", "scan_id"]
     again = io.read(tmp_path / f"out{ext}")
     assert_same_attributes(scan.vertex_attributes, again.vertex_attributes)

@@ -30,6 +30,7 @@ NORMAL_NAMES = ("nx", "ny", "nz")
 _MANAGED_VLRS = {("LASF_Spec", 4), ("laszip encoded", 22204)}
 _COLOURS = ("red", "green", "blue")
 _CHUNK_POINTS = 1 << 20
+_CHUNKED_COMPRESSORS = (2, 3)
 
 
 def _laspy():
@@ -67,7 +68,7 @@ def read_las(path) -> Scan:
     normals = None
     if all(n in extra for n in NORMAL_NAMES):
         normals = np.column_stack([attributes.pop(n) for n in NORMAL_NAMES]).astype(np.float64)
-        info["normal_type"] = extra["nx"].dtype.str if hasattr(extra["nx"].dtype, "str") else "f4"
+        info["normal_type"] = np.dtype(extra["nx"].dtype).str[1:]
     try:
         return Scan(points=points, precision=np.float64, normals=normals, vertex_attributes=attributes,
                     format_info=info)
@@ -83,12 +84,12 @@ def _read_records(laspy, path: str):
         header = reader.header
         count = int(header.point_count)
         if header.are_points_compressed:
-            _check_chunk_table(path, int(header.offset_to_point_data))
+            if _laszip_compressor(header) in _CHUNKED_COMPRESSORS:
+                _check_chunk_table(path, int(header.offset_to_point_data))
         else:
-            room = os.path.getsize(path) - int(header.offset_to_point_data)
-            if count * header.point_format.size > room:
-                raise ValueError(f"the header says {count} points, the file holds {max(room, 0) // header.point_format.size}"
-                                 " (truncated?)")
+            room, size = os.path.getsize(path) - int(header.offset_to_point_data), header.point_format.size
+            if count * size > room:
+                raise ValueError(f"the header says {count} points, the file holds {max(room, 0) // size} (truncated?)")
         arrays, done = [], 0
         while done < count:
             chunk = reader.read_points(min(_CHUNK_POINTS, count - done))
@@ -102,6 +103,15 @@ def _read_records(laspy, path: str):
         records = np.concatenate(arrays) if arrays else np.zeros(0, dtype=dtype)
         points = laspy.ScaleAwarePointRecord(records, header.point_format, header.scales, header.offsets)
         return laspy.LasData(header=header, points=points)
+
+
+def _laszip_compressor(header) -> int | None:
+    """The LASzip VLR's compressor: 1 point-wise (no chunk table), 2 chunked, 3 layered chunked."""
+    for v in header.vlrs:
+        if (v.user_id, v.record_id) == ("laszip encoded", 22204):
+            data = v.record_data_bytes() if hasattr(v, "record_data_bytes") else bytes(v.record_data)
+            return struct.unpack("<H", data[:2])[0] if len(data) >= 2 else None
+    return None
 
 
 def _check_chunk_table(path: str, start: int) -> None:
