@@ -20,9 +20,10 @@ from .scan import Scan
 COORDINATES = ("x", "y", "z")
 NORMALS = ("nx", "ny", "nz")
 FACE_INDEX_NAMES = ("vertex_indices", "vertex_index")
-# Tried first: triangles, and the per-corner UVs MeshLab writes with them. A file that does not
-# match fails that attempt cheaply and is read again by plyfile's general parser.
-_TRIANGLE_LISTS = {"face": {"vertex_indices": 3, "vertex_index": 3, "texcoord": 6}}
+# Tried in turn: triangles (with the per-corner UVs MeshLab writes with them), then quads. A file
+# that does not match fails an attempt cheaply, at its first face of another length.
+_FIXED_LISTS = ({"face": {"vertex_indices": 3, "vertex_index": 3, "texcoord": 6}},
+                {"face": {"vertex_indices": 4, "vertex_index": 4, "texcoord": 8}})
 # The property types PLY has; an attribute in any other dtype is converted on writing.
 _PLY_DTYPES = {np.dtype(t) for t in ("i1", "u1", "i2", "u2", "i4", "u4", "f4", "f8")}
 
@@ -72,16 +73,18 @@ def _parse(path: str) -> PlyData:
     if fast is not None:
         return fast
     try:
-        try:
-            return PlyData.read(path, known_list_len=_TRIANGLE_LISTS)
-        except Exception:
-            # Not all triangles, or a damaged file: the general parser reads the first and
-            # names the problem in the second.
-            return PlyData.read(path)
+        for fixed in _FIXED_LISTS:
+            try:
+                return PlyData.read(path, known_list_len=fixed)
+            except Exception:
+                pass  # not all triangles (quads), or a damaged file: try the next reading
+        # Mixed polygons are read by the general parser; a damaged file fails here again, and
+        # this time its error is reported.
+        return PlyData.read(path)
     except MemoryError:
         raise ValueError(f"{path}: damaged PLY header (element counts too large)") from None
     except Exception as exc:  # plyfile raises PlyParseError, ValueError, struct/IndexError...
-        raise ValueError(f"{path}: not a readable PLY file ({type(exc).__name__}: {exc})") from None
+        raise ValueError(f"{path}: not a readable PLY file ({type(exc).__name__}: {_first_line(exc)})") from None
 
 
 def _scan_of(ply: PlyData, path: str) -> Scan:
@@ -264,3 +267,7 @@ def _ply_values(name: str, values: np.ndarray) -> np.ndarray:
 def _code(dtype) -> str:
     """'u1', 'i4', 'f8': a dtype as plyfile's type codes, without byte order."""
     return np.dtype(dtype).str[1:]
+
+
+def _first_line(exc: Exception) -> str:
+    return str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__

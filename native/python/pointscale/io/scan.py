@@ -99,10 +99,12 @@ class Scan:
             arrays[f"{_VERTEX_PREFIX}{i}"] = values
         for i, (name, values) in enumerate(self.face_attributes.items()):
             arrays[f"{_FACE_PREFIX}{i}"] = values
+        # Indices as int32 when they fit: half the size on disk; from_arrays widens them again.
+        index = np.int32 if self.n_points <= np.iinfo(np.int32).max else np.int64
         if isinstance(self.faces, np.ndarray):
-            arrays["faces"] = self.faces
+            arrays["faces"] = self.faces.astype(index)
         elif self.faces is not None:
-            arrays["faces_flat"] = np.concatenate(self.faces) if self.faces else np.zeros(0, np.int64)
+            arrays["faces_flat"] = np.concatenate(self.faces).astype(index) if self.faces else np.zeros(0, index)
             arrays["faces_offsets"] = np.concatenate([[0], np.cumsum([len(f) for f in self.faces])]).astype(np.int64)
         return arrays
 
