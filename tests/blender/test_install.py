@@ -22,7 +22,8 @@ SCRIPT = r'''
 import json, sys
 sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in type(f).__module__.lower()
                     and "scikitbuild" not in type(f).__name__.lower()]
-sys.path[:] = [p for p in sys.path if not p.startswith(sys.argv[2])]
+# The source tree goes; a virtual environment inside the clone (.venv, where bpy is) stays.
+sys.path[:] = [p for p in sys.path if not p.startswith(sys.argv[2]) or p.startswith(sys.prefix)]
 import bpy, numpy as np
 out = {}
 out["install"] = sorted(bpy.ops.extensions.package_install_files(
