@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import math
 import os
-import struct
 import warnings
 
 import numpy as np
 
 from .atomic import atomic_write
+from .las_checks import check_chunk_table, check_layout
 from .scan import Scan
 
 COORDINATE_FIELDS = ("X", "Y", "Z")
@@ -30,7 +30,6 @@ NORMAL_NAMES = ("nx", "ny", "nz")
 _MANAGED_VLRS = {("LASF_Spec", 4), ("laszip encoded", 22204)}
 _COLOURS = ("red", "green", "blue")
 _CHUNK_POINTS = 1 << 20
-_CHUNKED_COMPRESSORS = (2, 3)
 
 
 def _laspy():
@@ -77,15 +76,16 @@ def read_las(path) -> Scan:
 
 
 def _read_records(laspy, path: str):
-    """laspy.read, but in chunks and with lazrs's sequential decoder, so that a damaged header's
-    point count cannot make anything allocate memory for it: lazrs's parallel decoder sizes one
-    buffer by the count and aborts the process (not an exception) when that fails."""
+    """laspy.read, made safe for damaged files: the header's counts and lengths are checked
+    against the file first (las_checks), and points are read 1M at a time with lazrs's sequential
+    decoder, so that no point count sizes a buffer (lazrs's parallel decoder allocates one for
+    all points and aborts the process, not an exception, when that fails)."""
+    check_layout(path)
     with laspy.open(path, laz_backend=laspy.LazBackend.Lazrs) as reader:
         header = reader.header
         count = int(header.point_count)
         if header.are_points_compressed:
-            if _laszip_compressor(header) in _CHUNKED_COMPRESSORS:
-                _check_chunk_table(path, int(header.offset_to_point_data))
+            check_chunk_table(path, header)
         else:
             room, size = os.path.getsize(path) - int(header.offset_to_point_data), header.point_format.size
             if count * size > room:
@@ -103,38 +103,6 @@ def _read_records(laspy, path: str):
         records = np.concatenate(arrays) if arrays else np.zeros(0, dtype=dtype)
         points = laspy.ScaleAwarePointRecord(records, header.point_format, header.scales, header.offsets)
         return laspy.LasData(header=header, points=points)
-
-
-def _laszip_compressor(header) -> int | None:
-    """The LASzip VLR's compressor: 1 point-wise (no chunk table), 2 chunked, 3 layered chunked."""
-    for v in header.vlrs:
-        if (v.user_id, v.record_id) == ("laszip encoded", 22204):
-            data = v.record_data_bytes() if hasattr(v, "record_data_bytes") else bytes(v.record_data)
-            return struct.unpack("<H", data[:2])[0] if len(data) >= 2 else None
-    return None
-
-
-def _check_chunk_table(path: str, start: int) -> None:
-    """Refuses a LAZ chunk table that lazrs would size a buffer by without looking (a damaged
-    count makes it allocate up to 64 GB and abort the process). The table's offset is the first
-    8 bytes of the point data (or, when those are -1, the last 8 of the file); the table starts
-    with a version and the number of chunks, each of which takes at least one byte of the file."""
-    with open(path, "rb") as f:
-        size = os.fstat(f.fileno()).st_size
-        f.seek(start)
-        raw = f.read(8)
-        if len(raw) < 8:
-            raise ValueError("truncated LAZ point data")
-        offset = int.from_bytes(raw, "little", signed=True)
-        if offset == -1:
-            f.seek(max(size - 8, 0))
-            offset = int.from_bytes(f.read(8), "little", signed=True)
-        if not start + 8 <= offset <= size - 8:
-            raise ValueError(f"damaged LAZ chunk table offset {offset} in a {size}-byte file (truncated?)")
-        f.seek(offset)
-        _version, chunks = struct.unpack("<II", f.read(8))
-        if chunks > size - start:
-            raise ValueError(f"damaged LAZ chunk table ({chunks} chunks in a {size}-byte file)")
 
 
 def write_las(path, scan: Scan) -> None:
