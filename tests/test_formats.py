@@ -488,6 +488,34 @@ def test_missing_and_garbage_files_are_clear_errors(tmp_path, ext):
         io.read(garbage)
 
 
+def test_damaged_las_counts_are_refused_before_anything_trusts_them(tmp_path):
+    _laspy_file(tmp_path / "a.las", n=50)
+    data = bytearray((tmp_path / "a.las").read_bytes())
+    data[100:104] = struct.pack("<I", 0xFFFFFFFF)  # the VLR count: laspy would build 4 billion VLRs
+    (tmp_path / "vlrs.las").write_bytes(bytes(data))
+    with pytest.raises(ValueError, match="vlrs.las: damaged header: 4294967295 VLRs"):
+        io.read(tmp_path / "vlrs.las")
+    # A LAZ chunk table claiming 4 billion chunks: lazrs allocates 64 GB for it and aborts the
+    # process (without the check, this test ends pytest instead of failing).
+    _laspy_file(tmp_path / "a.laz", n=50)
+    data = bytearray((tmp_path / "a.laz").read_bytes())
+    start = laspy_header(tmp_path / "a.laz").offset_to_point_data
+    table = struct.unpack_from("<q", data, start)[0]  # the point data starts with the table's offset
+    struct.pack_into("<I", data, table + 4, 0xFFFFFFFF)  # after the table's version: its chunk count
+    (tmp_path / "chunks.laz").write_bytes(bytes(data))
+    with pytest.raises(ValueError, match="chunks.laz: damaged LAZ chunk table"):
+        io.read(tmp_path / "chunks.laz")
+    (tmp_path / "cut.laz").write_bytes((tmp_path / "a.laz").read_bytes()[:-2])
+    with pytest.raises(ValueError, match="cut.laz"):
+        io.read(tmp_path / "cut.laz")
+
+
+def laspy_header(path):
+    import laspy
+    with laspy.open(str(path)) as reader:
+        return reader.header
+
+
 def test_faces_out_of_range_are_refused(tmp_path):
     vertex = np.zeros(4, dtype=[("x", "f4"), ("y", "f4"), ("z", "f4")])
     face = np.array([([0, 1, 4],)], dtype=[("vertex_indices", "i4", (3,))])
