@@ -431,6 +431,18 @@ def test_e57_round_trip(tmp_path):
     assert np.allclose(back.vertex_attributes["intensity"], scan.vertex_attributes["intensity"], atol=1e-6)
 
 
+def test_e57_scans_are_placed_by_their_poses_and_numbered(tmp_path):
+    pye57 = pytest.importorskip("pye57")
+    e57 = pye57.E57(str(tmp_path / "m.e57"), mode="w")
+    for k in range(3):
+        e57.write_scan_raw({"cartesianX": np.arange(4.0) + k, "cartesianY": np.zeros(4), "cartesianZ": np.zeros(4)},
+                           translation=np.array([10.0 * k, 0, 0]), rotation=np.array([1.0, 0, 0, 0]))
+    e57.close()
+    scan = io.read(tmp_path / "m.e57")
+    assert scan.points[:, 0].tolist() == [0, 1, 2, 3, 11, 12, 13, 14, 22, 23, 24, 25]
+    assert scan.vertex_attributes["scan_id"].tolist() == [0] * 4 + [1] * 4 + [2] * 4
+
+
 def test_e57_without_pye57_says_how_to_install(tmp_path, monkeypatch):
     import sys
     monkeypatch.setitem(sys.modules, "pye57", None)  # import pye57 now raises ImportError

@@ -8,7 +8,9 @@ vertex (the points are what Pointscale processes, so vertices are never split): 
 corners disagree (a UV seam) keeps its first corner's value, with a warning. Polygons are kept as
 they are (no triangulation). Negative (relative) indices are resolved against the counts at the
 end of the file, which is exact when all vertices come before the faces, as in nearly every file.
-Groups, objects, materials and lines (l) are not kept.
+Groups, objects, materials and lines (l) are not kept. Read, UVs are the vertex attributes
+texture_u, texture_v and colours red, green, blue as the file's floats (0..1 by convention);
+written, 8- and 16-bit integer colours (from PLY or LAS) are divided by 255 or 65535.
 """
 from __future__ import annotations
 
