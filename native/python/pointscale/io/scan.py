@@ -136,8 +136,8 @@ def _from_arrays(cls, arrays: dict, points, normals) -> Scan:
         vertex_names = [str(s) for s in meta["vertex_attributes"]]
         face_names = [str(s) for s in meta["face_attributes"]]
         info = meta["format_info"]
-    except (KeyError, TypeError, ValueError, UnicodeDecodeError) as exc:
-        raise ValueError(f"scan arrays: damaged {_META_KEY} ({exc})") from None
+    except (KeyError, TypeError, ValueError, UnicodeDecodeError, RecursionError) as exc:
+        raise ValueError(f"scan arrays: damaged {_META_KEY} ({type(exc).__name__}: {exc})") from None
     if n < 0 or precision.kind not in "fi" or not isinstance(info, dict):
         raise ValueError(f"scan arrays: damaged {_META_KEY} (n_points {n}, precision {precision})")
     blobs = {}
@@ -169,8 +169,8 @@ def _from_arrays(cls, arrays: dict, points, normals) -> Scan:
         info = _refs_to_bytes(info, blobs)
         scan = cls(points=points, precision=precision, normals=normals, vertex_attributes=vertex, faces=faces,
                    face_attributes=face, format_info=info)
-    except (KeyError, TypeError) as exc:
-        raise ValueError(f"scan arrays: damaged format_info ({exc})") from None
+    except (KeyError, TypeError, RecursionError) as exc:
+        raise ValueError(f"scan arrays: damaged format_info ({type(exc).__name__}: {exc})") from None
     except ValueError as exc:
         raise ValueError(f"scan arrays: {exc}") from None
     if scan.n_points != n:
