@@ -71,7 +71,7 @@ RayHits shoot_rays(const Points& origins, const Points& directions, const Spatia
         const double f0 = signed_distance(0.0, ok0);
         double side_t[2] = {0.0, 0.0}, side_f[2] = {f0, f0};
         bool side_ok[2] = {ok0, ok0};
-        for (double step = dt; step <= range && !hit; step += dt) {
+        for (double step = dt; dt > 0.0 && step <= range && !hit; step += dt) {  // dt = 0 would never end
           for (int side = 0; side < 2 && !hit; ++side) {
             const double tt = side ? -step : step;
             bool ok;

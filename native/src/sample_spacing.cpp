@@ -32,6 +32,14 @@ Eigen::VectorXd local_spacing(const SpatialIndex& index, int k) {
     spacing(i) = spacing_from_neighbours(d2, found, k);
   });
   fill_missing_spacing(spacing);
+  if (n > 0 && !(spacing(0) > 0.0)) {
+    // Every point's nearest k + 8 are its own duplicates (a few positions, each repeated many
+    // times): nothing to measure. Take the spacing of n points spread over the bounding box's
+    // largest side instead of 0, which would give zero kernel widths (NaN weights).
+    const Points& p = index.points();
+    const double side = (p.colwise().maxCoeff() - p.colwise().minCoeff()).maxCoeff();
+    spacing.setConstant(side / std::sqrt(static_cast<double>(n)));
+  }
   return spacing;
 }
 

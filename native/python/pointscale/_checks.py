@@ -76,16 +76,22 @@ def half_width(points: np.ndarray) -> float:
     return float((0.5 * (column_reduce(points, np.max) - column_reduce(points, np.min))).max())
 
 
-def extent_eigenvalues(points: np.ndarray) -> np.ndarray:
-    """Square roots of the covariance eigenvalues, largest first: the spread along 3 axes.
-    Computed in a frame scaled to the set (by a power of two), so that sets of any size in the
-    float range are measured alike: their squares neither overflow nor underflow."""
+def _scaled_spread(points: np.ndarray) -> np.ndarray:
+    """extent_eigenvalues in a frame scaled to the set by a power of two (its largest deviation
+    from the mean is in [0.5, 1)), so that sets of any size in the float range, 1e-320 to
+    1e300, are measured alike: their squares neither overflow nor underflow."""
     c = points - column_reduce(points, np.mean)
     w = float(np.abs(c).max())
-    scale = math.ldexp(1.0, -math.frexp(w)[1]) if w > 0 else 1.0
-    c = c * scale
+    if w > 0.0:
+        c = np.ldexp(c, -math.frexp(w)[1])
     ev = np.linalg.eigvalsh(c.T @ c / len(points))
-    return np.sqrt(np.clip(ev[::-1], 0.0, None)) / scale
+    return np.sqrt(np.clip(ev[::-1], 0.0, None)), (math.frexp(w)[1] if w > 0.0 else 0)
+
+
+def extent_eigenvalues(points: np.ndarray) -> np.ndarray:
+    """Square roots of the covariance eigenvalues, largest first: the spread along 3 axes."""
+    spread, exponent = _scaled_spread(points)
+    return np.ldexp(spread, exponent)
 
 
 def require_extent(points: np.ndarray, name: str = "points", minimum: bool = True) -> float:
@@ -115,7 +121,7 @@ def require_surface(points: np.ndarray, name: str = "points", allow_planar: bool
     then sets outside the supported size (require_extent)."""
     if half_width(points) == 0.0:
         raise ValueError(f"all {name} are identical: they define no surface")
-    spread = extent_eigenvalues(points)
+    spread, _ = _scaled_spread(points)  # judged by shape, whatever the size
     if spread[0] == 0.0:
         raise ValueError(f"all {name} are identical: they define no surface")
     # Rounding leaves eigenvalues near 1e-16 of the largest, so spreads below 1e-6 count as zero.
@@ -137,7 +143,7 @@ def positive(value, name: str, integer: bool = False, minimum=None, maximum=None
         raise ValueError(f"{name} must be a {'whole ' if integer else ''}number, got {value!r}") from None
     if integer and v != value:
         raise ValueError(f"{name} must be a whole number, got {value!r}")
-    if not np.isfinite(v) or v <= 0 or (minimum is not None and v < minimum):
+    if not (integer or math.isfinite(v)) or v <= 0 or (minimum is not None and v < minimum):
         lo = f">= {minimum}" if minimum is not None else "> 0"
         raise ValueError(f"{name} must be {lo}, got {value!r}")
     if maximum is not None and v > maximum:

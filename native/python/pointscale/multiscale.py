@@ -116,9 +116,10 @@ def load(path) -> Decomposition:
     """Reads a file written by Decomposition.save. A file that cannot be read, or whose arrays
     do not make a decomposition, raises ValueError."""
     try:
-        with np.load(os.fspath(path), allow_pickle=False) as f:
-            if not hasattr(f, "files"):
-                raise ValueError("it holds one array, not the arrays of a decomposition (.npz)")
+        f = np.load(os.fspath(path), allow_pickle=False)
+        if not isinstance(f, np.lib.npyio.NpzFile):
+            raise ValueError("it holds one array, not the arrays of a decomposition (.npz)")
+        with f:
             arrays = dict(f)
     except MemoryError:
         raise
@@ -253,7 +254,7 @@ def _checked_stats(arrays, bands: int) -> list | None:
             for key, value in report.items():
                 if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
                     raise ValueError(f"{key} must be a finite number, got {value!r}")
-    except (ValueError, UnicodeDecodeError) as exc:
+    except (ValueError, UnicodeDecodeError, RecursionError, TypeError, OverflowError) as exc:
         raise _bad(f"stats {exc}") from None
     return stats
 

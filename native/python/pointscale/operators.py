@@ -19,8 +19,8 @@ from .multiscale import (MIN_COARSE_POINTS, Decomposition, _decimation_option, _
 def _diffusion_settings(lam, mu, taubin, neighbors):
     """Checks the diffusion parameters; returns (neighbors, lam, mu)."""
     lam = positive(lam, "lam")
-    if lam > 1.0:
-        raise ValueError(f"lam must be in (0, 1] for a stable explicit step, got {lam}")
+    if not 1e-3 <= lam <= 1.0:
+        raise ValueError(f"lam must be in [0.001, 1] for a stable explicit step, got {lam}")
     neighbors = positive(neighbors, "neighbors", integer=True, minimum=3, maximum=MAX_NEIGHBORS)
     if mu is None:
         mu = _core.taubin_mu(lam, 0.1) if taubin else 0.0
@@ -31,8 +31,8 @@ def _diffusion_settings(lam, mu, taubin, neighbors):
             mu = float(mu)
         except (TypeError, ValueError):
             raise ValueError(f"mu must be a number below -lam, got {mu!r}") from None
-        if not np.isfinite(mu) or mu >= -lam:
-            raise ValueError(f"mu must be below -lam = {-lam} (Taubin's inflating step), got {mu}")
+        if not np.isfinite(mu) or mu >= -lam or mu < -1e3:
+            raise ValueError(f"mu must be below -lam = {-lam} (Taubin's inflating step) and at least -1000, got {mu}")
     return neighbors, lam, mu
 
 
