@@ -517,6 +517,15 @@ def test_damaged_las_counts_are_refused_before_anything_trusts_them(tmp_path):
     (tmp_path / "chunks.laz").write_bytes(bytes(data))
     with pytest.raises(ValueError, match="chunks.laz: damaged LAZ chunk table"):
         io.read(tmp_path / "chunks.laz")
+    # A layered chunk (point formats 6-10) whose first layer claims 3 GB: lazrs allocated it.
+    io.write(tmp_path / "b.laz", coloured_scan(300))  # LAS 1.4, point format 7: layered chunks
+    data = bytearray((tmp_path / "b.laz").read_bytes())
+    header = laspy_header(tmp_path / "b.laz")
+    first_layer = header.offset_to_point_data + 8 + header.point_format.size + 4
+    struct.pack_into("<I", data, first_layer, 3_000_000_000)
+    (tmp_path / "layer.laz").write_bytes(bytes(data))
+    with pytest.raises(ValueError, match="layer.laz: damaged LAZ chunk 0: its layers claim"):
+        io.read(tmp_path / "layer.laz")
     (tmp_path / "cut.laz").write_bytes((tmp_path / "a.laz").read_bytes()[:-2])
     with pytest.raises(ValueError, match="cut.laz"):
         io.read(tmp_path / "cut.laz")

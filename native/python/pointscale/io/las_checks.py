@@ -2,8 +2,9 @@
 
 laspy reads as many VLRs as the header's count says (a damaged count of 4 billion makes it build
 billions of empty records: 10 GB and minutes before a MemoryError) and reads an EVLR of whatever
-length its header gives; lazrs sizes its chunk table by the count stored in the file and aborts
-the process when that allocation fails. Each count and length is checked here against the
+length its header gives; lazrs sizes its chunk table by the count stored in the file, and each
+layer of a layered chunk by the byte count stored before it, and aborts the process when such an
+allocation fails. Each count and length is checked here against the
 bytes the file actually has, so a damaged file is a ValueError and nothing larger than the file
 is ever allocated.
 """
@@ -15,6 +16,7 @@ import struct
 _VLR_HEADER = 54    # reserved u16, user id 16 bytes, record id u16, length u16, description 32 bytes
 _EVLR_HEADER = 60   # the same with a u64 length
 _CHUNKED_COMPRESSORS = (2, 3)  # LASzip: 1 point-wise (no chunk table), 2 chunked, 3 layered chunked
+_LAYERED = 3
 
 
 def check_layout(path: str) -> None:
@@ -75,11 +77,67 @@ def check_chunk_table(path: str, header) -> None:
         _version, chunks = struct.unpack("<II", f.read(8))
         if chunks > size - start:
             raise ValueError(f"damaged LAZ chunk table ({chunks} chunks in a {size}-byte file)")
+    if _laszip_compressor(header) == _LAYERED:
+        _check_layers(path, header, start, size)
+
+
+def _check_layers(path: str, header, start: int, size: int) -> None:
+    """Layered LAZ (point formats 6-10): each chunk is the raw first point, a u32 point count
+    and one u32 byte count per layer, then the layers. lazrs allocates each layer's byte count
+    as read, so a damaged one (3 GB, found by corruption) is refused unless the chunk holds it."""
+    import lazrs
+
+    data = _laszip_vlr(header)
+    layers = _layer_count(data)
+    if layers is None:
+        return  # items this check does not know: leave them to lazrs
+    point_size = int(header.point_format.size)
+    with open(path, "rb") as f:
+        f.seek(start)
+        try:
+            table = lazrs.read_chunk_table(f, lazrs.LazVlr(data))
+        except Exception as exc:
+            raise ValueError(f"damaged LAZ chunk table ({exc})") from None
+        position = start + 8
+        for i, (_points, length) in enumerate(table or []):
+            if position + length > size:
+                raise ValueError(f"LAZ chunk {i} runs past the end of the file (truncated?)")
+            fixed = point_size + 4 + 4 * layers
+            if length >= fixed:
+                f.seek(position + point_size)
+                count = struct.unpack("<I", f.read(4))[0]
+                sizes = struct.unpack(f"<{layers}I", f.read(4 * layers))
+                if count > 1 and sum(sizes) > length - fixed:
+                    raise ValueError(f"damaged LAZ chunk {i}: its layers claim {sum(sizes)} bytes, "
+                                     f"the chunk has {length - fixed}")
+            position += length
+
+
+def _layer_count(data: bytes) -> int | None:
+    """Layers per chunk from the LASzip VLR's items: point14 9, RGB14 1, RGBNIR14 2,
+    wavepacket14 1, byte14 one per byte; None for any other item."""
+    if len(data) < 34:
+        return None
+    count = struct.unpack_from("<H", data, 32)[0]
+    if len(data) < 34 + 6 * count:
+        return None
+    layers = 0
+    for i in range(count):
+        kind, item_size, _version = struct.unpack_from("<HHH", data, 34 + 6 * i)
+        per_item = {10: 9, 11: 1, 12: 2, 13: 1}.get(kind, item_size if kind == 14 else None)
+        if per_item is None:
+            return None
+        layers += per_item
+    return layers
+
+
+def _laszip_vlr(header) -> bytes:
+    for v in header.vlrs:
+        if (v.user_id, v.record_id) == ("laszip encoded", 22204):
+            return bytes(v.record_data_bytes() if hasattr(v, "record_data_bytes") else v.record_data)
+    return b""
 
 
 def _laszip_compressor(header) -> int | None:
-    for v in header.vlrs:
-        if (v.user_id, v.record_id) == ("laszip encoded", 22204):
-            data = v.record_data_bytes() if hasattr(v, "record_data_bytes") else bytes(v.record_data)
-            return struct.unpack("<H", data[:2])[0] if len(data) >= 2 else None
-    return None
+    data = _laszip_vlr(header)
+    return struct.unpack("<H", data[:2])[0] if len(data) >= 2 else None
