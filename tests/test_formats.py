@@ -575,6 +575,13 @@ def test_no_vertices_and_non_finite_coordinates_are_refused(tmp_path):
         io.read(tmp_path / "empty.xyz")
 
 
+@pytest.mark.parametrize("ext", FORMATS)
+def test_an_empty_scan_is_not_written(tmp_path, ext):
+    with pytest.raises(ValueError, match="no points"):
+        io.write(tmp_path / f"a{ext}", Scan(points=np.zeros((0, 3))))
+    assert os.listdir(tmp_path) == []
+
+
 def test_unknown_extension_names_the_supported_ones_in_one_line(tmp_path):
     with pytest.raises(ValueError) as error:
         io.read(tmp_path / "scan.dae")

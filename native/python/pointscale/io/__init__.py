@@ -49,6 +49,8 @@ def write(path, scan: Scan) -> None:
         scan = dataclasses.replace(scan)  # checks again what may have been edited in place (attributes, faces)
     except ValueError as exc:
         raise ValueError(f"{os.fspath(path)}: {exc}") from None
+    if scan.n_points == 0:
+        raise ValueError(f"{os.fspath(path)}: the scan has no points; nothing to write")
     if not np.isfinite(scan.points).all():
         raise ValueError(f"{os.fspath(path)}: the scan has non-finite points (did you call with_geometry?)")
     _format(path)[1](os.fspath(path), scan)
