@@ -696,10 +696,16 @@ def test_atomic_write_leaves_nothing_on_failure(tmp_path, exception):
 
 
 def test_failed_writer_leaves_no_partial_file(tmp_path):
-    scan = Scan(points=ps.shapes.sphere(50), vertex_attributes={"big": np.full(50, 2 ** 40, dtype=np.int64)})
-    with pytest.raises(ValueError, match="big"):
+    scan = Scan(points=ps.shapes.sphere(50), vertex_attributes={"big": np.full(50, 2 ** 60, dtype=np.int64)})
+    with pytest.raises(ValueError, match="a.ply: attribute 'big'"):
         io.write(tmp_path / "a.ply", scan)
     assert os.listdir(tmp_path) == []
+    (tmp_path / "file").write_text("")
+    with pytest.raises(ValueError, match="cannot write"):  # a folder that is a file: OSError inside
+        io.write(tmp_path / "file" / "a.ply", Scan(points=np.zeros((1, 3))))
+    with pytest.warns(UserWarning, match="stored as double"):  # 2**40 fits a double exactly
+        io.write(tmp_path / "b.ply", Scan(points=np.zeros((1, 3)), vertex_attributes={"t": np.array([2 ** 40])}))
+    assert io.read(tmp_path / "b.ply").vertex_attributes["t"].tolist() == [2.0 ** 40]
 
 
 # -- the old entry points -------------------------------------------------------------------------

@@ -53,7 +53,15 @@ def write(path, scan: Scan) -> None:
         raise ValueError(f"{os.fspath(path)}: the scan has no points; nothing to write")
     if not np.isfinite(scan.points).all():
         raise ValueError(f"{os.fspath(path)}: the scan has non-finite points (did you call with_geometry?)")
-    _format(path)[1](os.fspath(path), scan)
+    writer = _format(path)[1]
+    try:
+        writer(os.fspath(path), scan)
+    except OSError as exc:  # a folder that cannot be created or written, a full disk
+        raise ValueError(f"{os.fspath(path)}: cannot write ({exc.strerror or exc})") from None
+    except ValueError as exc:
+        if os.fspath(path) in str(exc):
+            raise
+        raise ValueError(f"{os.fspath(path)}: {exc}") from None
 
 
 def read_ply(path) -> Scan:
@@ -69,7 +77,10 @@ def write_ply(path, points, normals=None, faces=None, scalars: dict | None = Non
     precision = points.dtype if points.dtype in (np.float32, np.float64) else np.dtype(np.float64)
     scan = Scan(points=points, precision=precision, normals=normals, faces=faces,
                 vertex_attributes=dict(scalars or {}))
-    ply.write_ply(path, scan, binary=binary)
+    try:
+        ply.write_ply(path, scan, binary=binary)
+    except OSError as exc:
+        raise ValueError(f"{os.fspath(path)}: cannot write ({exc.strerror or exc})") from None
 
 
 def _format(path):

@@ -196,6 +196,8 @@ def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy):
             name = name + "_value"
         if column.dtype.kind == "b":
             column = column.astype(np.uint8)
+        elif column.dtype == np.float16:  # LAS extra bytes have no half floats
+            column = column.astype(np.float32)
         if name in declared:
             d = declared[name]
             params.append(laspy.ExtraBytesParams(name=name, type=d["type"], description=d.get("description", ""),

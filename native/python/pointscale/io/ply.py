@@ -244,7 +244,8 @@ def _ordered(columns: dict, order: list) -> dict:
 
 
 def _ply_values(name: str, values: np.ndarray) -> np.ndarray:
-    """values in a dtype PLY has: bool -> uint8, 64-bit integers -> 32-bit when they fit."""
+    """values in a dtype PLY has: bool -> uint8, 64-bit integers -> 32-bit when they fit, else
+    double when exact, float16 -> float32."""
     if not name or any(c.isspace() for c in name) or not name.isascii():
         raise ValueError(f"attribute name {name!r} cannot be a PLY property name (ASCII without spaces)")
     values = np.asarray(values)
@@ -258,7 +259,11 @@ def _ply_values(name: str, values: np.ndarray) -> np.ndarray:
             info = np.iinfo(target)
             if values.size == 0 or (values.min() >= info.min and values.max() <= info.max):
                 return values.astype(target)
-        raise ValueError(f"attribute {name!r} ({dtype}) does not fit PLY's 32-bit integers")
+        if np.abs(values).max() <= 2 ** 53:  # whole numbers a double holds exactly
+            warnings.warn(f"attribute {name!r} ({dtype}) exceeds PLY's 32-bit integers; stored as double",
+                          stacklevel=5)
+            return values.astype(np.float64)
+        raise ValueError(f"attribute {name!r} ({dtype}) does not fit PLY's 32-bit integers or a double")
     if dtype.kind == "f":
         return values.astype(np.float64 if dtype.itemsize > 4 else np.float32)
     raise ValueError(f"attribute {name!r} has dtype {dtype}, which PLY cannot store")
