@@ -55,6 +55,10 @@ def read_pts(path) -> Scan:
 
 def write_xyz(path, scan: Scan) -> None:
     names, columns, formats = _columns(scan, normals=True)
+    spaced = [n for n in names if not n or any(c.isspace() or c in ",:" for c in n)]
+    if spaced:  # the header is split on whitespace and commas, and ":" starts the dtype
+        warnings.warn(f"{path}: column names {spaced} written with '_' for spaces, commas and colons", stacklevel=3)
+        names = ["".join("_" if c.isspace() or c in ",:" else c for c in n) or "column" for n in names]
     header = None
     if len(names) > (6 if scan.normals is not None else 3):
         header = " ".join(f"{n}:{c.dtype.str.lstrip('<>=|')}" if i >= 3 else n
