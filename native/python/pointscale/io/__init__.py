@@ -3,8 +3,9 @@
     scan = pointscale.io.read("site.laz")            # Scan: points (n, 3) float64, attributes...
     pointscale.io.write("site_smooth.laz", scan.with_geometry(new_points, scan.normals))
 
-PLY (plyfile), LAS/LAZ (laspy + lazrs), OBJ/OFF/STL (trimesh), XYZ/PTS (numpy), E57 (pye57,
-optional). Every reader raises ValueError with one line naming the file for anything missing or
+PLY (plyfile; ASCII and triangle/quad meshes without its row-by-row loops), LAS/LAZ (laspy +
+lazrs, with the file's counts checked first), STL (trimesh), OBJ/OFF/XYZ/PTS (numpy), E57 (pye57,
+optional: pip install pye57). Every reader raises ValueError with one line naming the file for anything missing or
 damaged; every writer writes through atomic_write, so a failed write leaves no partial file.
 """
 from __future__ import annotations
