@@ -417,6 +417,18 @@ def test_pts_round_trip_keeps_intensity_and_colour(tmp_path):
     assert back.vertex_attributes["red"].dtype == np.uint8
 
 
+def test_pts_of_several_scans_keeps_them_apart(tmp_path):
+    (tmp_path / "m.pts").write_text("2\n0 0 0 5\n1 0 0 6\n3\n2 0 0 7\n3 0 0 8\n4 0 0 9\n")
+    scan = io.read(tmp_path / "m.pts")
+    assert scan.points[:, 0].tolist() == [0, 1, 2, 3, 4]
+    assert scan.vertex_attributes["scan_id"].tolist() == [0, 0, 1, 1, 1]
+    io.write(tmp_path / "again.pts", scan)
+    assert (tmp_path / "again.pts").read_text() == (tmp_path / "m.pts").read_text()
+    (tmp_path / "cut.pts").write_text("2\n0 0 0 5\n1 0 0 6\n3\n2 0 0 7\n")
+    with pytest.raises(ValueError, match="cut.pts: block 1 says 3 points, the file has 1"):
+        io.read(tmp_path / "cut.pts")
+
+
 def test_e57_round_trip(tmp_path):
     pytest.importorskip("pye57")
     scan = coloured_scan(900, offset=5e6)

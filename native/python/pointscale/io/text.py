@@ -6,7 +6,9 @@
       name every column, starting with x y z), columns 4-6 are normals when every row of them has unit length, and other
       columns are kept as float64 attributes column_3, column_4, ...
 .pts  a first line with the point count, then x y z [intensity] [r g b] (Leica/Faro style):
-      4 columns are intensity, 6 are colour, 7 are both.
+      4 columns are intensity, 6 are colour, 7 are both. A file of several scans, each block
+      after its own count line, is read whole with vertex attribute scan_id (uint16), and a scan
+      whose scan_id is in increasing order is written that way.
 Coordinates are written with %.17g, which float64 reads back exactly.
 """
 from __future__ import annotations
@@ -19,7 +21,7 @@ import numpy as np
 
 from .atomic import atomic_write
 from .scan import Scan
-from .text_tables import write_rows
+from .text_tables import numbers, write_rows
 
 _HEADER_MARK = "#"
 _PTS_COLUMNS = {3: (), 4: ("intensity",), 6: ("red", "green", "blue"), 7: ("intensity", "red", "green", "blue")}
@@ -38,19 +40,57 @@ def read_xyz(path) -> Scan:
 
 def read_pts(path) -> Scan:
     path = os.fspath(path)
-    first, rows = _load(path, skip_first=True)
-    try:
-        count = int(first.split()[0])
-    except (ValueError, IndexError, AttributeError):
-        raise ValueError(f"{path}: a .pts file starts with its point count, got {first!r}") from None
-    if count != len(rows):
-        raise ValueError(f"{path}: the first line says {count} points, the file has {len(rows)} (truncated?)")
+    rows, blocks = _pts_rows(path)
     extra = _PTS_COLUMNS.get(rows.shape[1])
     if extra is None:
         raise ValueError(f"{path}: .pts rows have 3, 4, 6 or 7 columns, got {rows.shape[1]}")
     names = ["x", "y", "z", *extra]
     dtypes = ["f8"] * 3 + [_integer_dtype(rows[:, 3 + i], name) for i, name in enumerate(extra)]
-    return _scan(path, rows, names, dtypes, {"format": "pts"})
+    scan = _scan(path, rows, names, dtypes, {"format": "pts"})
+    if len(blocks) > 1:  # several scans, each after its own count line
+        scan.vertex_attributes["scan_id"] = np.repeat(np.arange(len(blocks), dtype=np.uint16), blocks)
+    return scan
+
+
+def _pts_rows(path: str):
+    """(rows (n, c) float64, points per block): one count line and its rows, or several in turn."""
+    if not os.path.isfile(path):
+        raise ValueError(f"no such file: {path}")
+    try:
+        first, rows = _load(path, skip_first=True)
+    except ValueError as exc:
+        single = exc  # a second count line makes loadtxt fail: try blocks
+    else:
+        try:
+            count = int(first.split()[0])
+        except (ValueError, IndexError, AttributeError):
+            raise ValueError(f"{path}: a .pts file starts with its point count, got {first.strip()[:40]!r}") from None
+        if count != len(rows):
+            raise ValueError(f"{path}: the first line says {count} points, the file has {len(rows)} (truncated?)")
+        return rows, [count]
+    try:
+        with open(path, "r", encoding="utf-8", errors="strict") as f:
+            lines = [line for line in f.read().splitlines() if line.strip()]
+    except (OSError, UnicodeDecodeError):
+        raise single from None
+    parts, blocks, i = [], [], 0
+    while i < len(lines):
+        words = lines[i].split()
+        if len(words) != 1 or not words[0].isdigit():
+            raise single
+        count = int(words[0])
+        block = lines[i + 1:i + 1 + count]
+        if len(block) < count:
+            raise ValueError(f"{path}: block {len(blocks)} says {count} points, the file has {len(block)} (truncated?)")
+        parts.append(numbers(block, f"block {len(blocks)}", path))
+        blocks.append(count)
+        i += 1 + count
+    if len({p.shape[1] for p in parts if len(p)}) > 1:
+        raise ValueError(f"{path}: the blocks have different numbers of columns")
+    rows = np.concatenate([p for p in parts if len(p)]) if any(len(p) for p in parts) else np.zeros((0, 3))
+    if len(rows) == 0:
+        raise ValueError(f"{path}: no vertices")
+    return rows, blocks
 
 
 def write_xyz(path, scan: Scan) -> None:
@@ -77,10 +117,16 @@ def write_pts(path, scan: Scan) -> None:
             columns.append(scan.vertex_attributes[c])
             formats.append(_format(scan.vertex_attributes[c]))
     kept = {"intensity", "red", "green", "blue"}
+    ids = scan.vertex_attributes.get("scan_id")
+    counts = [scan.n_points]
+    if ids is not None and ids.ndim == 1 and np.all(np.diff(ids.astype(np.int64)) >= 0):
+        # Points in scan order: one block (count line and rows) per scan, as Leica/Faro write them.
+        counts = np.unique(ids, return_counts=True)[1].tolist()  # sorted ids: counts in file order
+        kept.add("scan_id")
     dropped = [n for n in scan.vertex_attributes if n not in kept] + (["normals"] if scan.normals is not None else [])
     if dropped:
         warnings.warn(f"{path}: .pts has no room for {', '.join(dropped)}; not written", stacklevel=3)
-    _write(path, np.column_stack(columns), formats, header=None, count=scan.n_points)
+    _write(path, np.column_stack(columns), formats, header=None, count=counts)
 
 
 # -- helpers ----------------------------------------------------------------------------------
@@ -201,13 +247,18 @@ def _format(values: np.ndarray) -> str:
     return "%d" if np.asarray(values).dtype.kind in "iub" else "%.17g"
 
 
-def _write(path: str, rows: np.ndarray, formats: list, header: str | None, count: int | None) -> None:
+def _write(path: str, rows: np.ndarray, formats: list, header: str | None, count: list | None) -> None:
+    """rows under an optional header line; with count (points per block), each block of rows
+    after a line with its count (PTS)."""
     buffer = io.StringIO()
-    if count is not None:
-        buffer.write(f"{count}\n")
     if header is not None:
         buffer.write(f"{_HEADER_MARK} {header}\n")
-    write_rows(buffer, rows, " ".join(formats))
+    start = 0
+    for block in count if count is not None else [len(rows)]:
+        if count is not None:
+            buffer.write(f"{block}\n")
+        write_rows(buffer, rows[start:start + block], " ".join(formats))
+        start += block
     with atomic_write(path) as temporary:
         with open(temporary, "w", encoding="utf-8") as f:
             f.write(buffer.getvalue())
