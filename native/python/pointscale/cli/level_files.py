@@ -5,7 +5,6 @@ import numpy as np
 
 from .. import _core
 from .._checks import centre
-from ..multiscale import reconstruct_levels  # noqa: F401  (the public form of reconstruct_with_normals)
 
 # Neighbours of the PCA normals of the finest level, the one level the model stores no normals for.
 FINEST_NORMAL_NEIGHBORS = 16

@@ -22,6 +22,7 @@ import numpy as np
 
 from .atomic import atomic_write
 from .las_checks import check_chunk_table, check_layout
+from .optional import optional_module
 from .scan import Scan
 
 COORDINATE_FIELDS = ("X", "Y", "Z")
@@ -33,11 +34,7 @@ _CHUNK_POINTS = 1 << 20
 
 
 def _laspy():
-    try:
-        import laspy
-    except ImportError:
-        raise ValueError("reading and writing .las/.laz needs laspy: pip install 'laspy[lazrs]'") from None
-    return laspy
+    return optional_module("laspy", ".las/.laz", "'laspy[lazrs]'")
 
 
 def read_las(path) -> Scan:

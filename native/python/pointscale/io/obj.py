@@ -22,7 +22,7 @@ import numpy as np
 
 from .atomic import atomic_write
 from .scan import Scan
-from .text_tables import colour_for_text, numbers, polygons, savetxt, write_rows
+from .text_tables import colour_for_text, numbers, polygons, read_text, savetxt, write_rows
 
 _COLOURS = ("red", "green", "blue")
 _UV_NAMES = (("texture_u", "texture_v"), ("s", "t"), ("u", "v"))
@@ -94,15 +94,7 @@ def write_obj(path, scan: Scan) -> None:
 
 
 def _lines(path: str) -> dict:
-    if not os.path.isfile(path):
-        raise ValueError(f"no such file: {path}")
-    try:
-        with open(path, "r", encoding="utf-8", errors="strict") as f:
-            text = f.read()
-    except UnicodeDecodeError:
-        raise ValueError(f"{path}: not a text OBJ file") from None
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read ({exc})") from None
+    text = read_text(path, "a text OBJ file")
     lines = {"v": [], "vt": [], "vn": [], "f": []}
     for line in text.splitlines():
         parts = line.split(None, 1)

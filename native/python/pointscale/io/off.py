@@ -15,7 +15,7 @@ import numpy as np
 
 from .atomic import atomic_write
 from .scan import Scan
-from .text_tables import face_rows, numbers, polygons, write_rows
+from .text_tables import face_rows, numbers, polygons, read_text, write_rows
 
 _COLOUR_NAMES = ("red", "green", "blue", "alpha")
 
@@ -95,15 +95,7 @@ def write_off(path, scan: Scan) -> None:
 
 def _header(path: str):
     """(keyword such as COFF, [nv, nf, ne], the remaining non-empty lines without comments)."""
-    if not os.path.isfile(path):
-        raise ValueError(f"no such file: {path}")
-    try:
-        with open(path, "r", encoding="utf-8", errors="strict") as f:
-            text = f.read()
-    except UnicodeDecodeError:
-        raise ValueError(f"{path}: not a text OFF file (binary OFF is not supported)") from None
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read ({exc})") from None
+    text = read_text(path, "a text OFF file (binary OFF is not supported)")
     lines = [line.split("#", 1)[0].strip() for line in text.splitlines()]
     lines = [line for line in lines if line]
     if not lines or not lines[0].split()[0].upper().endswith("OFF"):

@@ -15,15 +15,12 @@ import warnings
 import numpy as np
 
 from .atomic import atomic_write
+from .optional import optional_module
 from .scan import Scan
 
 
 def _trimesh():
-    try:
-        import trimesh
-    except ImportError:
-        raise ValueError("reading and writing .stl needs trimesh: pip install trimesh") from None
-    return trimesh
+    return optional_module("trimesh", ".stl", "trimesh")
 
 
 def read_stl(path) -> Scan:

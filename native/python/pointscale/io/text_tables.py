@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import io
+import os
 
 import numpy as np
 
@@ -59,3 +60,17 @@ def colour_for_text(values: np.ndarray) -> np.ndarray:
     if values.dtype.kind in "ui":
         return values / float(np.iinfo(values.dtype).max)
     return values.astype(np.float64)
+
+
+def read_text(path: str, what: str) -> str:
+    """The whole text file at `path`; ValueError naming it when it is missing, not UTF-8 text
+    (`what` says what was expected) or unreadable."""
+    if not os.path.isfile(path):
+        raise ValueError(f"no such file: {path}")
+    try:
+        with open(path, "r", encoding="utf-8", errors="strict") as f:
+            return f.read()
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not {what}") from None
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read ({exc})") from None
