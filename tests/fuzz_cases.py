@@ -223,6 +223,12 @@ class Mutation:
                     b'[{"support_points": 1e999}]'][self.seed % 11]
             arrays[self.how] = np.frombuffer(text, dtype=np.uint8).copy()
             return
+        if self.how == "plausible":  # passes every check of load, but the structure is random
+            try:
+                _plausible(arrays, rng)
+            except (IndexError, ValueError, TypeError, KeyError):
+                pass  # an earlier mutation broke the arrays already: load refuses them anyway
+            return
         if key not in arrays:
             arrays[key] = np.zeros(3)
             return
@@ -291,8 +297,43 @@ class Mutation:
         arrays[key] = flat.reshape(a.shape)
 
 
+def _plausible(arrays: dict, rng) -> None:
+    """Replaces one level's structure (or the normals, details or local coordinates) with random
+    values in range: cluster indices, anchors still members of their clusters, positive kernel
+    widths, unit normals. load accepts it; the core must still give finite points or refuse."""
+    if "details" not in arrays or "labels" not in arrays or np.asarray(arrays["details"]).ndim != 2:
+        return
+    k, n = np.asarray(arrays["details"]).shape
+    if k == 0 or f"anchors_{k - 1}" not in arrays:
+        return
+    l = int(rng.integers(0, k))
+    c = len(arrays[f"anchors_{l}"])
+    what = int(rng.integers(0, 7))
+    if what == 0:
+        arrays[f"neighborhoods_{l}"] = rng.integers(0, c, np.shape(arrays[f"neighborhoods_{l}"])).astype(np.int32)
+    elif what == 1:
+        arrays[f"frames_{l}"] = rng.integers(0, c, (c, 2)).astype(np.int32)
+    elif what == 2:
+        arrays[f"local_{l}"] = rng.normal(0, 10.0 ** int(rng.integers(-3, 45)), (n, 3))
+    elif what == 3:
+        arrays[f"kernel_{l}"] = 10.0 ** rng.uniform(-99, 99, c)
+    elif what == 4:
+        v = rng.normal(size=(n, 3))
+        v /= np.linalg.norm(v, axis=1)[:, None]
+        v[rng.random(n) < 0.3] = 0.0
+        arrays["base_normals"] = v
+    elif what == 5:
+        arrays["details"] = rng.normal(0, 10.0 ** int(rng.integers(-3, 49)), (k, n))
+    else:
+        labels = np.array(arrays["labels"])
+        row = rng.integers(0, c, n).astype(labels.dtype)
+        row[np.asarray(arrays[f"anchors_{l}"])] = np.arange(c)
+        labels[l] = row
+        arrays["labels"] = labels
+
+
 MUTATIONS = ("drop", "extra", "trim", "extend", "trim1", "extend1", "retype", "scalar", "reshape", "transpose",
-             "value", "value", "value", "shuffle", "random", "zero", "settings", "stats")
+             "value", "value", "value", "shuffle", "random", "zero", "settings", "stats", "plausible", "plausible")
 
 
 @dataclass(frozen=True)

@@ -81,9 +81,9 @@ def _scaled_spread(points: np.ndarray) -> np.ndarray:
     from the mean is in [0.5, 1)), so that sets of any size in the float range, 1e-320 to
     1e300, are measured alike: their squares neither overflow nor underflow."""
     c = points - column_reduce(points, np.mean)
-    w = float(np.abs(c).max())
+    w = max(float(c.max()), -float(c.min()))
     if w > 0.0:
-        c = np.ldexp(c, -math.frexp(w)[1])
+        np.ldexp(c, -math.frexp(w)[1], out=c)  # in place: no second copy of a large set
     ev = np.linalg.eigvalsh(c.T @ c / len(points))
     return np.sqrt(np.clip(ev[::-1], 0.0, None)), (math.frexp(w)[1] if w > 0.0 else 0)
 
