@@ -105,7 +105,7 @@ def test_every_attribute_survives_into_every_level_and_result(tmp_path):
         assert np.abs(got - dec.normals(l)).max() < 1e-6
     finest = read_ply(files[2])
     outward = np.einsum("ij,ij->i", finest.normals, finest.points / np.array([0.7, 1.0, 1.6]) ** 2) > 0
-    assert outward.mean() > 0.99
+    assert outward.mean() > 0.999  # measured: every point
 
 
 def test_a_trimesh_file_keeps_its_colours(tmp_path):
