@@ -52,7 +52,7 @@ def worker(args) -> None:
     if args.only:
         strategies = {k: v for k, v in strategies.items() if k in args.only.split(",")}
     cases = fuzz_cases.st.one_of(list(strategies.values()))
-    state = {"count": 0, "outcomes": {}, "failures": [], "current": None, "pid": os.getpid()}
+    state = {"count": 0, "outcomes": {}, "failures": [], "guarded": [], "current": None, "pid": os.getpid()}
 
     def save():
         tmp = args.state + ".tmp"
@@ -79,6 +79,8 @@ def worker(args) -> None:
             state["count"] += 1
             key = f"{case.function}: {outcome}"
             state["outcomes"][key] = state["outcomes"].get(key, 0) + 1
+            if "non-finite" in outcome and len(state["guarded"]) < 10:
+                state["guarded"].append(last["case"])
             state["current"] = None
 
         try:
@@ -116,6 +118,7 @@ def main() -> int:
     count = 0
     outcomes: collections.Counter = collections.Counter()
     failures = []
+    guarded = []
     restarts = 0
     with tempfile.TemporaryDirectory() as folder:
         state_path = os.path.join(folder, "state.json")
@@ -153,6 +156,7 @@ def main() -> int:
                 pass
             count += state.get("count", 0)
             outcomes.update(state.get("outcomes", {}))
+            guarded += state.get("guarded", [])
             for failure in state.get("failures", []):
                 failures.append(failure)
                 print(f"FAILURE: {failure['error']}\n  {failure['case']}", flush=True)
@@ -173,6 +177,9 @@ def main() -> int:
         per_function[function][outcome] = value
     for function in sorted(per_function):
         print(f"  {function:22s} " + ", ".join(f"{k} {v}" for k, v in sorted(per_function[function].items())))
+    for case in guarded[:10]:
+        print(f"\nallowed, but worth a look: a ValueError from the last guard (a non-finite result):\n"
+              f"  reproduce: {reproducer(case)}")
     for i, failure in enumerate(failures, 1):
         print(f"\nfailure {i}: {failure['kind']}: {failure['error']}")
         if failure.get("case"):

@@ -13,11 +13,9 @@ or infinity in a result, a crash or a hang is a failure.
 from __future__ import annotations
 
 import io
-import json
 import os
 import tempfile
 import warnings
-import zipfile
 from dataclasses import dataclass, field
 
 import numpy as np

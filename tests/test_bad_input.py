@@ -103,8 +103,6 @@ def test_a_very_coarse_base_is_warned_about():
 # NaN or an exception other than ValueError.
 
 import io
-import json
-import resource
 import subprocess
 import sys
 import textwrap

@@ -318,14 +318,19 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     decimation  gamma in (0, 1): level l-1 is projected onto gamma**(k-l+1) * n cluster centroids
     kernel      kernel width as a multiple of the local spacing of those centroids
     normals     optional (n, 3) normals: only their orientation is used, for level 0's outside
-    neighbors   support points in each plane fit
-    threads     worker threads, 0 for all cores
+    neighbors   support points in each plane fit (4..1024)
+    threads     worker threads, 0 for all cores, at most 1024; a thread the system cannot start
+                stops the work with RuntimeError
     progress    progress(fraction) -> bool; returning False stops and raises pointscale.Cancelled
     smoother    "mls" (Sec. 7) or "diffusion": each decimated level is first smoothed by
                 diffusion_iterations Laplacian steps of lam over diffusion_neighbors, Taubin's
                 volume-keeping variant when taubin (Sec. 5.1)
     encoding    "projection" (Sec. 6.2, exact round trip) or "rayshoot" (Sec. 6.1, see
                 decompose_rayshoot: the finest level resamples the input surface)
+    Supported input: coordinates within +-1e150, spanning 1e-50 to 1e50 about their centre
+    (_checks.py says why); levels up to 64, kernel 0.001..1000, max_iterations up to 1000,
+    diffusion_iterations up to 10000 and below what Taubin's lam|mu pair keeps stable. Anything
+    else raises ValueError, as does a diffusion that would not give the input back.
     """
     if smoother not in ("mls", "diffusion"):
         raise ValueError(f"smoother must be 'mls' or 'diffusion', got {smoother!r}")

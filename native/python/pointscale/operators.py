@@ -12,8 +12,7 @@ from . import _core
 from ._checks import (MAX_DIFFUSION_ITERATIONS, MAX_GAIN, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS, as_callback,
                       as_points, centre, finite_result, kernel_option, positive, require_extent, require_near,
                       require_stable_diffusion, require_surface, set_threads)
-from .multiscale import (MIN_COARSE_POINTS, Decomposition, _decimation_option, _points_needed,
-                         _require_finite_model, _require_round_trip)
+from .multiscale import MIN_COARSE_POINTS, Decomposition, _decimation_option, _points_needed, _require_finite_model
 
 
 def _diffusion_settings(lam, mu, taubin, neighbors):
@@ -50,11 +49,14 @@ def smooth_diffusion(points, iterations: int = 10, *, lam: float = 0.5, taubin: 
 
     L(p) is the mean of p's k nearest neighbours minus p, over neighbourhoods computed once on the
     input and kept (so points cannot drift into clusters).
-    iterations  number of steps
-    lam         step in (0, 1]
+    iterations  number of steps, at most 10000
+    lam         step in [0.001, 1]
     taubin      alternate each step with a negative one, mu = 1 / (0.1 - 1/lam) (Taubin 1995),
                 which keeps the volume that plain Laplacian smoothing shrinks away
-    mu          Taubin's negative step, below -lam; overrides taubin
+    mu          Taubin's negative step, in [-1000, -lam); overrides taubin
+    A lam|mu pair lifts some frequencies slightly above 1 per iteration (mu = -10 with lam = 0.5
+    by 5.5x, the default Taubin pair by 1.00066x); iterations that would lift one more than 4x
+    in all, which inflates the shape and ends in NaN, raise ValueError.
     neighbors   k, the point itself included
     Returns the smoothed (n, 3) points, indexed like the input.
     """
@@ -74,7 +76,8 @@ def diffusion_levels(points, levels: int = 4, *, iterations: int = 10, growth: f
     """A discrete scale space by diffusion: (levels, n, 3), level 0 the smoothest, the last the input.
 
     Level l-1 is level l smoothed by iterations * growth**(k-l) more steps, so the diffusion time
-    grows geometrically towards the coarse levels, like the kernel widths of decompose().
+    grows geometrically towards the coarse levels, like the kernel widths of decompose(). The steps
+    of all levels together are bounded like smooth_diffusion's iterations (at most 10000).
     """
     levels = positive(levels, "levels", integer=True, minimum=2, maximum=MAX_LEVELS)
     iterations = positive(iterations, "iterations", integer=True, maximum=MAX_DIFFUSION_ITERATIONS)
