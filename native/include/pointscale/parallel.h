@@ -14,7 +14,8 @@ int thread_count();
 
 // Calls body(begin, end) on disjoint chunks covering [0, n). The calling thread works too and
 // reports progress to `stage` about every 50 ms. Exceptions (including Cancelled) are rethrown
-// in the calling thread after all workers stopped.
+// in the calling thread after all workers stopped. A worker thread that the system cannot start
+// stops and joins the ones that did start, then throws std::runtime_error (RuntimeError in Python).
 void parallel_for(std::size_t n, const std::function<void(std::size_t, std::size_t)>& body,
                   const ProgressStage& stage = {}, std::size_t chunk = 256);
 
