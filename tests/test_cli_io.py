@@ -292,10 +292,14 @@ def test_info_shows_the_real_stats(tmp_path):
     assert run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3").returncode == 0
     done = run("info", str(tmp_path / "out"))
     assert done.returncode == 0, done.stderr
+    saved = ps.load(tmp_path / "out" / "decomposition.npz")
     fresh = ps.decompose(points, levels=3)
+    assert saved.stats == fresh.stats  # kept in the file, not recomputed
     for l, s in enumerate(fresh.stats):
-        assert f"band {l}: support {s['support_points']} points" in done.stdout
-        assert s["support_points"] > 0
+        rms = float(np.sqrt(np.mean(fresh.details[l] ** 2)))
+        assert (f"band {l}: support {s['support_points']} points, kernel width {s['kernel_width']:.4g}, "
+                f"detail rms {rms:.4g}, not converged {s['not_converged']}, pinned {s['pinned']}") in done.stdout
+        assert s["kernel_width"] > 0 and s["not_converged"] + s["pinned"] > 0
     assert "ply, 9000 vertices" in done.stdout
 
 
@@ -351,3 +355,57 @@ def test_a_truncated_input_of_any_format_is_one_clear_line(tmp_path, extension):
     msg = one_line_error(run("decompose", str(tmp_path / f"cut{extension}"), "-o", str(tmp_path / "out")))
     assert f"cut{extension}" in msg
     assert not (tmp_path / "out").exists()
+
+
+def test_a_base_whose_vertices_were_renumbered_is_refused(tmp_path):
+    # STL renumbers vertices on reading (it stores triangle corners); a level edited in it and
+    # given back as --base would pair each vertex with another's detail.
+    trimesh = pytest.importorskip("trimesh")
+    mesh = trimesh.creation.icosphere(subdivisions=4, radius=1.5)
+    mesh.vertices += 0.01 * np.sin(7 * mesh.vertices)
+    order = np.random.default_rng(3).permutation(len(mesh.vertices))
+    inverse = np.argsort(order)
+    io.write(tmp_path / "ico.ply", io.Scan(points=mesh.vertices[order], faces=inverse[mesh.faces]))
+    assert run("decompose", str(tmp_path / "ico.ply"), "-o", str(tmp_path / "out"), "--levels", "3").returncode == 0
+    level0 = io.read(tmp_path / "out" / "level_0.ply")
+    io.write(tmp_path / "edited.stl", level0)
+    msg = one_line_error(run("reconstruct", str(tmp_path / "out"), "--base", str(tmp_path / "edited.stl"), "-o",
+                             str(tmp_path / "r.ply")))
+    assert "other faces" in msg and not (tmp_path / "r.ply").exists()
+    # The same level in a format that keeps the order is taken, and gives back the input.
+    done = run("reconstruct", str(tmp_path / "out"), "--base", str(tmp_path / "out" / "level_0.ply"), "-o",
+               str(tmp_path / "r.ply"))
+    assert done.returncode == 0, done.stderr
+    assert np.abs(read_ply(tmp_path / "r.ply").points - mesh.vertices[order]).max() < 1e-9
+
+
+def test_a_mesh_written_to_a_point_format_says_its_faces_are_dropped(tmp_path):
+    points = ellipsoid_with_bumps(6000)
+    faces = np.random.default_rng(6).integers(0, len(points), (300, 3))
+    write_ply(tmp_path / "in.ply", points, faces=faces)
+    done = run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3", "--format", "xyz")
+    assert done.returncode == 0, done.stderr
+    warnings = [l for l in done.stderr.splitlines() if "warning" in l]
+    assert len(warnings) == 1 and "300 faces" in warnings[0] and ".part" not in warnings[0], done.stderr
+
+
+def test_an_output_format_that_cannot_hold_the_model_is_refused_before_computing(tmp_path, monkeypatch, capsys):
+    io.write(tmp_path / "cloud.xyz", io.Scan(points=ellipsoid_with_bumps(6000)))
+    calls = []
+    monkeypatch.setattr(cli.commands, "decompose", lambda *a, **k: calls.append(1))
+    assert cli.main(["decompose", str(tmp_path / "cloud.xyz"), "-o", str(tmp_path / "o"), "--format", "stl"]) == 2
+    assert calls == [] and "no faces" in capsys.readouterr().err and not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("name, text", [
+    ("inf.off", "OFF\n3 inf 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+    ("big.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999999\n"),
+    ("wrap.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                 "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
+                 "3 0 1 4294967298\n"),
+    ("colour.xyz", "# x y z red:u1\n0 0 0 300\n1 0 0 -1\n0 1 0 5\n"),
+])
+def test_numbers_too_large_for_their_type_are_refused_not_wrapped(tmp_path, name, text):
+    (tmp_path / name).write_text(text)
+    msg = one_line_error(run("decompose", str(tmp_path / name), "-o", str(tmp_path / "out")))
+    assert name in msg

@@ -28,7 +28,7 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
     same warning for every level is shown once, without the name."""
     text = _one_line(message)
     head, _, rest = text.partition(": ")
-    if rest and ("/" in head or "\\" in head or "." in head):
+    if rest and ("/" in head or "\\" in head):
         text = rest
     if text not in _warned:
         _warned.add(text)
@@ -45,7 +45,7 @@ def main(argv=None) -> int:
     try:
         run(args)
     except KeyboardInterrupt:
-        print("pointscale: interrupted; no files were written", file=sys.stderr)
+        print("pointscale: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Cancelled:
         print("pointscale: cancelled; no files were written", file=sys.stderr)
@@ -59,5 +59,8 @@ def main(argv=None) -> int:
     except OSError as exc:
         where = f" {exc.filename}" if exc.filename else ""
         print(f"pointscale: error:{where} {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_ERROR
+    except Exception as exc:  # a worker thread that could not start, a library's own error
+        print(f"pointscale: error: {type(exc).__name__}: {_one_line(exc)}", file=sys.stderr)
         return EXIT_ERROR
     return 0

@@ -10,7 +10,7 @@ import numpy as np
 from .. import decompose, io, reconstruct, shapes
 from .folder import DECOMPOSITION_FILE, SOURCE_FILE, level_name, read_decomposition
 from .level_files import finest_normals, level_scan, reconstruct_with_normals
-from .output_checks import check_output_file, check_output_folder, writable_extension
+from .output_checks import check_format_holds, check_output_file, check_output_folder, read_base, writable_extension
 from .progress import CommandProgress
 from .staged_output import StagedOutput
 
@@ -60,8 +60,14 @@ class _Writers:
         self._futures = []
         self._progress, self._stage, self._expected = progress, stage, expected
 
-    def submit(self, task) -> None:
-        self._futures.append(self._pool.submit(task))
+    def submit(self, task, temporary: Path, final: Path) -> None:
+        """Runs task(), which writes `temporary`; its errors name `final`, the file the user asked for."""
+        def run():
+            try:
+                task()
+            except ValueError as exc:
+                raise ValueError(str(exc).replace(str(temporary), str(final))) from None
+        self._futures.append(self._pool.submit(run))
 
     def wait(self) -> None:
         report = self._progress.stage(self._stage)
@@ -73,7 +79,14 @@ class _Writers:
         return self
 
     def __exit__(self, *exc):
-        self._pool.shutdown(wait=True, cancel_futures=True)
+        # The running writes must end before the caller discards their files; a second Ctrl-C
+        # while they finish must not cut this wait short.
+        while True:
+            try:
+                self._pool.shutdown(wait=True, cancel_futures=True)
+                break
+            except KeyboardInterrupt:
+                continue
         return False
 
 
@@ -88,6 +101,7 @@ def cmd_decompose(args) -> None:
     with CommandProgress(stages) as progress, StagedOutput() as staged:
         progress.stage("reading")
         scan = io.read(args.input)
+        check_format_holds(extension, scan, args.input)
         start = time.perf_counter()
         dec = decompose(scan.points, levels=args.levels, decimation=args.decimation, kernel=args.kernel,
                         neighbors=args.neighbors, normals=scan.normals, smoother=args.smoother,
@@ -102,18 +116,21 @@ def cmd_decompose(args) -> None:
         with _Writers(progress, "writing", expected=k + 3) as writers:
             model_tmp = staged.temporary(out / DECOMPOSITION_FILE)
             source_tmp = staged.temporary(out / SOURCE_FILE)
-            writers.submit(lambda: np.savez(model_tmp, **dec.to_dict()))
-            writers.submit(lambda: np.savez(source_tmp, **scan.to_arrays()))
-            level_tmp = [staged.temporary(out / level_name(l, extension)) for l in range(k + 1)]
+            writers.submit(lambda: np.savez(model_tmp, **dec.to_dict()), model_tmp, out / DECOMPOSITION_FILE)
+            writers.submit(lambda: np.savez(source_tmp, **scan.to_arrays()), source_tmp, out / SOURCE_FILE)
+            level_files = [out / level_name(l, extension) for l in range(k + 1)]
+            level_tmp = [staged.temporary(f) for f in level_files]
             for l in range(k):
                 writers.submit(lambda l=l: io.write(level_tmp[l], level_scan(scan, levels[l], normals[l],
-                                                                             dec.details[l], extension)))
+                                                                             dec.details[l], extension)),
+                               level_tmp[l], level_files[l])
             # The finest level's normals are computed while the other files are written.
             normals.append(finest_normals(levels[k], normals[k - 1], args.threads))
-            writers.submit(lambda: io.write(level_tmp[k], level_scan(scan, levels[k], normals[k], None, extension)))
+            writers.submit(lambda: io.write(level_tmp[k], level_scan(scan, levels[k], normals[k], None, extension)),
+                           level_tmp[k], level_files[k])
             writers.wait()
         written = {out / DECOMPOSITION_FILE, out / SOURCE_FILE} | {out / level_name(l, extension) for l in range(k + 1)}
-        staged.commit(remove_first=[p for p in earlier if p not in written])
+        staged.commit(remove_after=[p for p in earlier if p not in written])
     print(f"decomposed {args.input} in {elapsed:.2f} s")
     print(describe(dec, scan))
     print(f"wrote {out / DECOMPOSITION_FILE}, {SOURCE_FILE} and {level_name(0, extension)} .. "
@@ -128,21 +145,18 @@ def cmd_reconstruct(args) -> None:
         progress.stage("reading")
         dec, source = read_decomposition(Path(args.decomposition))
         gains = parse_gains(args.gains, dec.n_bands) if args.gains else None
-        base = None
-        if args.base:
-            base = io.read(args.base).points
-            if len(base) != dec.n_points:
-                raise ValueError(f"--base {args.base} has {len(base)} points; the decomposition has {dec.n_points} "
-                                 "(edit level_0 without adding or removing vertices)")
+        template = source if source is not None else io.Scan(points=dec.base)
+        check_format_holds(out.suffix.lower(), template, args.decomposition)
+        base = read_base(args.base, dec.n_points, source) if args.base else None
         points, reference = reconstruct_with_normals(dec, gains, base, args.threads, progress.stage("reconstructing"))
         if not np.isfinite(points).all():
             raise ValueError(f"--gains {args.gains} overflow: the result has infinite coordinates")
         progress.stage("normals")
         normals = finest_normals(points, reference, args.threads)
-        template = source if source is not None else io.Scan(points=points)
         tmp = staged.temporary(out)
         with _Writers(progress, "writing", expected=1) as writers:
-            writers.submit(lambda: io.write(tmp, level_scan(template, points, normals, None, out.suffix.lower())))
+            writers.submit(lambda: io.write(tmp, level_scan(template, points, normals, None, out.suffix.lower())),
+                           tmp, out)
             writers.wait()
         staged.commit()
     print(f"wrote {out} ({dec.n_points} points, gains {args.gains or 'all 1'}"

@@ -4,6 +4,8 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
+import numpy as np
+
 from .. import io
 from .folder import owned_files
 
@@ -56,3 +58,32 @@ def check_output_file(out: Path, force: bool) -> None:
     if not parent.exists():
         raise ValueError(f"cannot write {out}: the folder {parent} does not exist")
     _require_writable_folder(parent, out)
+
+
+def check_format_holds(extension: str, scan, name) -> None:
+    """Refuses, before any computing, an output format that cannot hold the model at all."""
+    if extension == ".stl" and scan.n_faces == 0:
+        raise ValueError(f"STL stores triangles and {name} has no faces; write .ply, .las or .xyz instead")
+
+
+def read_base(path: str, n_points: int, source):
+    """The edited level 0 of `path`, (n, 3), checked against the decomposition: the same vertex
+    count and, when both files have faces, the same faces (STL, say, renumbers its vertices on
+    reading, which would pair each vertex with another's detail)."""
+    base = io.read(path)
+    if base.n_points != n_points:
+        raise ValueError(f"--base {path} has {base.n_points} points; the decomposition has {n_points} "
+                         "(edit level_0 without adding or removing vertices)")
+    if source is not None and source.n_faces and base.n_faces and not _same_faces(base.faces, source.faces):
+        raise ValueError(f"--base {path} has other faces than the decomposed input: its vertices are "
+                         "not in the input's order (edit a level file in a format that keeps vertex order, "
+                         "such as PLY)")
+    return base.points
+
+
+def _same_faces(a, b) -> bool:
+    if isinstance(a, np.ndarray) and isinstance(b, np.ndarray):
+        return a.shape == b.shape and np.array_equal(a, b)
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return False
+    return len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b))

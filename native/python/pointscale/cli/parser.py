@@ -36,14 +36,14 @@ def join_signed_values(argv: list[str]) -> list[str]:
 
 def build_parser(formats: str) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="pointscale", formatter_class=_Formatter,
+        prog="pointscale", formatter_class=_Formatter, allow_abbrev=False,
         description="Multiscale point-sampled surfaces (Pauly, Kobbelt, Gross 2006): split a scan or mesh into a "
                     "smooth base and detail bands, filter the bands, carry the detail onto an edited base.",
         epilog=f"File formats, chosen by extension: {formats}.")
     parser.add_argument("--version", action="version", version=f"pointscale {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    d = sub.add_parser("decompose", formatter_class=_Formatter,
+    d = sub.add_parser("decompose", formatter_class=_Formatter, allow_abbrev=False,
                        help="split a model into a smooth base and detail bands",
                        description="Decomposes INPUT into levels P^0 (smoothest) .. P^k (the input) and writes a "
                                    "folder: decomposition.npz, source.npz (the input's attributes) and "
@@ -64,7 +64,7 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
                    help="replace an earlier decomposition in the output folder (its level files are removed)")
     d.add_argument("--threads", type=int, default=0, help="worker threads, 0 for all cores")
 
-    r = sub.add_parser("reconstruct", formatter_class=_Formatter,
+    r = sub.add_parser("reconstruct", formatter_class=_Formatter, allow_abbrev=False,
                        help="rebuild the model from a decomposition, with band gains or an edited base",
                        description="Rebuilds the finest level from a decomposition folder, each band scaled by its "
                                    "gain, on the stored or an edited base, with the input's attributes.")
@@ -76,11 +76,11 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
     r.add_argument("--force", action="store_true", help="overwrite the output file if it exists")
     r.add_argument("--threads", type=int, default=0, help="worker threads, 0 for all cores")
 
-    i = sub.add_parser("info", formatter_class=_Formatter, help="describe a decomposition",
+    i = sub.add_parser("info", formatter_class=_Formatter, allow_abbrev=False, help="describe a decomposition",
                        description="Prints a decomposition's levels, per-band statistics, settings and source.")
     i.add_argument("decomposition", help="folder written by decompose (or its decomposition.npz)")
 
-    m = sub.add_parser("demo", formatter_class=_Formatter,
+    m = sub.add_parser("demo", formatter_class=_Formatter, allow_abbrev=False,
                        help="run the whole pipeline on procedural shapes (no download)")
     m.add_argument("-o", "--output", default="pointscale-demo", help="output folder")
     m.add_argument("--points", type=int, default=100000, help="points of the demo sphere")

@@ -6,8 +6,11 @@ removes the temporary files, so a folder never holds half of a result.
 """
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
 import tempfile
+import threading
 from pathlib import Path
 
 
@@ -35,18 +38,20 @@ class StagedOutput:
         self._pending.append((tmp, final))
         return tmp
 
-    def commit(self, remove_first=()) -> None:
-        """Removes the files in `remove_first` (stale outputs of an earlier run), then renames
-        every temporary file into place."""
-        for stale in remove_first:
-            Path(stale).unlink(missing_ok=True)
-        umask = os.umask(0)
-        os.umask(umask)
-        for tmp, final in self._pending:
-            os.chmod(tmp, 0o666 & ~umask)  # mkstemp made it private; give it what open() would
-            os.replace(tmp, final)
-        self._pending.clear()
-        self._created_dirs.clear()
+    def commit(self, remove_after=()) -> None:
+        """Renames every temporary file into place, then removes the files in `remove_after`
+        (stale outputs of an earlier run). Ctrl-C waits until this is done, so the folder holds
+        either the old result or the new one."""
+        with _sigint_held():
+            umask = os.umask(0)
+            os.umask(umask)
+            for tmp, final in self._pending:
+                os.chmod(tmp, 0o666 & ~umask)  # mkstemp made it private; give it what open() would
+                os.replace(tmp, final)
+            for stale in remove_after:
+                Path(stale).unlink(missing_ok=True)
+            self._pending.clear()
+            self._created_dirs.clear()
 
     def discard(self) -> None:
         for tmp, _ in self._pending:
@@ -66,3 +71,16 @@ class StagedOutput:
         if exc_type is not None:
             self.discard()
         return False
+
+
+@contextlib.contextmanager
+def _sigint_held():
+    """Delays Ctrl-C (SIGINT) until the block is done; only the main thread can do so."""
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +34,8 @@ _FORMATS = {
     ".e57": (e57.read_e57, e57.write_e57),
 }
 SUPPORTED_EXTENSIONS = tuple(_FORMATS)
+# Point-cloud formats: a mesh written to them keeps its points and loses its faces.
+_FORMATS_WITHOUT_FACES = (".las", ".laz", ".xyz", ".pts", ".e57")
 
 __all__ = ["Scan", "SUPPORTED_EXTENSIONS", "atomic_write", "read", "read_ply", "write", "write_ply"]
 
@@ -55,6 +58,10 @@ def write(path, scan: Scan) -> None:
     if not np.isfinite(scan.points).all():
         raise ValueError(f"{os.fspath(path)}: the scan has non-finite points (did you call with_geometry?)")
     writer = _format(path)[1]
+    suffix = Path(os.fspath(path)).suffix.lower()
+    if scan.n_faces and suffix in _FORMATS_WITHOUT_FACES:
+        warnings.warn(f"{os.fspath(path)}: {suffix} has no place for faces; {scan.n_faces} faces"
+                      f"{' and their attributes' if scan.face_attributes else ''} not written", stacklevel=2)
     try:
         writer(os.fspath(path), scan)
     except OSError as exc:  # a folder that cannot be created or written, a full disk

@@ -118,7 +118,7 @@ def _faces(face_lines: list, nv: int, nvt: int, nvn: int, path: str):
         text = text.replace("//", "/0/")
     try:
         refs = np.array(text.replace("/", " ").split(), dtype=np.int64).reshape(len(tokens), -1)
-    except ValueError:
+    except (ValueError, OverflowError):  # OverflowError: an index past 64 bits
         raise ValueError(f"{path}: a face holds something that is not a vertex index") from None
     if (lengths < 3).any():
         raise ValueError(f"{path}: a face has fewer than 3 corners")

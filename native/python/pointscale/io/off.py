@@ -132,7 +132,7 @@ def _faces(lines: list, nv: int, path: str):
             extra = {len(r) - 1 - k for r, k in zip(rows, lengths)}
             colours = np.array([r[1 + k:] for r, k in zip(rows, lengths)]) if len(extra) == 1 \
                 else np.zeros((len(rows), 0))
-    except ValueError as exc:
+    except (ValueError, OverflowError) as exc:  # OverflowError: a count of inf
         raise ValueError(f"{path}: malformed face lines ({exc})") from None
     if not np.array_equal(flat, np.round(flat)):
         raise ValueError(f"{path}: face indices are not whole numbers")

@@ -15,6 +15,7 @@ from plyfile import PlyData, PlyElement, PlyListProperty
 
 from .atomic import atomic_write
 from .ply_ascii import read_ascii, write_ascii
+from .text_tables import IntegerOutOfRange
 from .scan import Scan
 
 COORDINATES = ("x", "y", "z")
@@ -69,7 +70,10 @@ def write_ply(path, scan: Scan, binary: bool | None = None) -> None:
 def _parse(path: str) -> PlyData:
     if not os.path.isfile(path):
         raise ValueError(f"no such file: {path}")
-    fast = read_ascii(path)
+    try:
+        fast = read_ascii(path)
+    except IntegerOutOfRange as exc:
+        raise ValueError(f"{path}: {exc}") from None
     if fast is not None:
         return fast
     try:

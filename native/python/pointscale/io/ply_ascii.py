@@ -13,7 +13,7 @@ import warnings
 import numpy as np
 from plyfile import PlyData, PlyElement, PlyListProperty, PlyProperty
 
-from .text_tables import write_rows
+from .text_tables import IntegerOutOfRange, check_integer_range, write_rows
 
 _MAX_HEADER_LINES, _MAX_HEADER_LINE = 100_000, 100_000
 _TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
@@ -67,6 +67,8 @@ def read_ascii(path: str) -> PlyData | None:
             element = PlyElement(name, [_ply_property(p) for p in properties], count)
             element.data = data
             out.append(element)
+    except IntegerOutOfRange:
+        raise  # plyfile's parser would wrap the value into its type
     except (OSError, UnicodeDecodeError, ValueError):
         return None  # a malformed row: plyfile's parser names it
     return PlyData(out, text=True, byte_order="=", comments=comments, obj_info=obj_info)
@@ -180,8 +182,10 @@ def _element_data(table: np.ndarray, fields: list, count: int):
             if not (table[:, start - 1] == length).all():
                 return None  # lists of differing lengths
             values = table[:, start:start + length]
-        if np.dtype(t).kind in "iu" and not np.array_equal(values, np.round(values)):
-            return None
+        if np.dtype(t).kind in "iu":
+            if not np.array_equal(values, np.round(values)):
+                return None
+            check_integer_range(values, np.dtype(t), name)
         data[name] = values
     return data
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from .atomic import atomic_write
 from .scan import Scan
-from .text_tables import numbers, write_rows
+from .text_tables import check_integer_range, numbers, write_rows
 
 _HEADER_MARK = "#"
 _PTS_COLUMNS = {3: (), 4: ("intensity",), 6: ("red", "green", "blue"), 7: ("intensity", "red", "green", "blue")}
@@ -206,6 +206,11 @@ def _scan(path, rows, names, dtypes, info) -> Scan:
         dtype = np.dtype(dtype)
         if dtype.kind in "iub" and not np.array_equal(values, np.round(values)):
             raise ValueError(f"{path}: column {name} is declared {dtype} but holds fractions")
+        if dtype.kind in "iu":
+            try:
+                check_integer_range(values, dtype, f"column {name}")
+            except ValueError as exc:
+                raise ValueError(f"{path}: {exc}") from None
         attributes[name] = values.astype(dtype)
     try:
         return Scan(points=points, precision=np.float64, normals=normals, vertex_attributes=attributes,

@@ -74,3 +74,16 @@ def read_text(path: str, what: str) -> str:
         raise ValueError(f"{path}: not {what}") from None
     except OSError as exc:
         raise ValueError(f"{path}: cannot read ({exc})") from None
+
+
+class IntegerOutOfRange(ValueError):
+    """A text value too large for its declared integer type: refused, never wrapped."""
+
+
+def check_integer_range(values: np.ndarray, dtype: np.dtype, what: str) -> None:
+    """Refuses text values that do not fit the declared integer type: a cast would wrap them
+    (a face index 2**32 + 2 would become 2, a colour 300 would become 44)."""
+    info = np.iinfo(dtype)
+    if values.size and (values.min() < info.min or values.max() > info.max):
+        raise IntegerOutOfRange(f"{what} is declared {dtype} but holds {values.min():.17g}..{values.max():.17g}, "
+                         f"outside {info.min}..{info.max}")
