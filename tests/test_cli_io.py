@@ -4,6 +4,7 @@ import signal
 import subprocess
 import sys
 import time
+import uuid
 from pathlib import Path
 
 import numpy as np
@@ -139,6 +140,7 @@ def test_formats_are_chosen_by_extension_in_both_directions(tmp_path):
     header = laspy.LasHeader(point_format=3, version="1.2")
     header.scales = np.array([0.001, 0.001, 0.001])
     header.offsets = np.array([450000.0, 5200000.0, 0.0])
+    header.uuid = uuid.UUID("0f1e2d3c-4b5a-6978-8796-a5b4c3d2e1f0")  # the survey project's GUID
     las = laspy.LasData(header)
     las.x, las.y, las.z = points[:, 0], points[:, 1], points[:, 2]
     las.intensity = np.arange(len(points), dtype=np.uint16)
@@ -148,6 +150,7 @@ def test_formats_are_chosen_by_extension_in_both_directions(tmp_path):
     assert done.returncode == 0, done.stderr
     level = laspy.read(tmp_path / "out" / "level_0.las")
     assert np.allclose(level.header.scales, 0.001) and np.allclose(level.header.offsets, header.offsets)
+    assert level.header.uuid == header.uuid
     assert np.array_equal(level.intensity, np.arange(len(points))) and (np.asarray(level.classification) == 2).all()
     done = run("reconstruct", str(tmp_path / "out"), "-o", str(tmp_path / "same.obj"))
     assert done.returncode == 0, done.stderr

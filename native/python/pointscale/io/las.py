@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+import uuid
 import warnings
 
 import numpy as np
@@ -131,6 +132,11 @@ def write_las(path, scan: Scan) -> None:
                 setattr(header, key, info[key])
         if "global_encoding" in info:
             header.global_encoding.value = int(info["global_encoding"])
+        if "project_guid" in info:
+            try:
+                header.uuid = uuid.UUID(str(info["project_guid"]))
+            except ValueError:
+                raise ValueError(f"{path}: project GUID {info['project_guid']!r} is not a GUID") from None
         header.vlrs.extend(_vlr(laspy, v) for v in info.get("vlrs", []))
         from laspy.vlrs.vlrlist import VLRList
         if info.get("evlrs"):
@@ -237,7 +243,10 @@ def _header_info(las, path) -> dict:
             "scales": [float(s) for s in h.scales], "offsets": [float(o) for o in h.offsets],
             "coordinates": "int32 X, Y, Z with x = X * scale + offset",
             "file_source_id": int(h.file_source_id), "global_encoding": int(h.global_encoding.value),
-            "system_identifier": str(h.system_identifier), "generating_software": str(h.generating_software)}
+            "system_identifier": str(h.system_identifier), "generating_software": str(h.generating_software),
+            # The project GUID names the survey project, which a derived file still belongs to; the
+            # creation date is not kept: a level file is created today (PDAL's default too).
+            "project_guid": str(h.uuid)}
     info["extra_dimensions"] = [_extra_info(d) for d in las.point_format.extra_dimensions]
     info["vlrs"] = [_vlr_info(v) for v in h.vlrs if (v.user_id, v.record_id) not in _MANAGED_VLRS]
     info["evlrs"] = [_vlr_info(v) for v in (h.evlrs or []) if (v.user_id, v.record_id) not in _MANAGED_VLRS]
