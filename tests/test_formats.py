@@ -367,16 +367,18 @@ def test_off_round_trip_with_colours_and_normals(tmp_path):
 
 def test_stl_corners_merge_into_shared_vertices(tmp_path):
     points, faces = triangle_mesh(3)
-    io.write(tmp_path / "a.stl", Scan(points=points, faces=faces))
-    back = io.read(tmp_path / "a.stl")
-    assert back.precision == np.float32
-    assert back.n_points == len(points) and back.faces.shape == faces.shape  # 3m corners -> n vertices
-    # the same triangles, in the same order, over float32 coordinates
-    assert np.abs(back.points[back.faces] - points[faces]).max() < 1e-7
-    # vertices come in the order of their first corner
     first_use = np.unique(faces.ravel(), return_index=True)[1]
     order = np.unique(faces.ravel())[np.argsort(first_use)]
-    assert np.abs(back.points - points[order]).max() < 1e-7
+    # float64 is written as ASCII STL, exactly; float32 as binary STL
+    for precision, bound in ((np.float64, 0.0), (np.float32, 1e-7)):
+        io.write(tmp_path / "a.stl", Scan(points=points, faces=faces, precision=precision))
+        back = io.read(tmp_path / "a.stl")
+        assert back.precision == precision and back.format_info["binary"] == (precision == np.float32)
+        assert back.n_points == len(points) and back.faces.shape == faces.shape  # 3m corners -> n vertices
+        # the same triangles, in the same order
+        assert np.abs(back.points[back.faces] - points[faces]).max() <= bound
+        # vertices come in the order of their first corner
+        assert np.abs(back.points - points[order]).max() <= bound
 
 
 def test_stl_of_a_point_cloud_is_refused(tmp_path):

@@ -103,9 +103,14 @@ def cmd_decompose(args) -> None:
         scan = io.read(args.input)
         check_format_holds(extension, scan, args.input)
         start = time.perf_counter()
-        dec = decompose(scan.points, levels=args.levels, decimation=args.decimation, kernel=args.kernel,
-                        neighbors=args.neighbors, normals=scan.normals, smoother=args.smoother,
-                        encoding=args.encoding, threads=args.threads, progress=progress.stage("decomposing"))
+        try:
+            dec = decompose(scan.points, levels=args.levels, decimation=args.decimation, kernel=args.kernel,
+                            neighbors=args.neighbors, normals=scan.normals, smoother=args.smoother,
+                            encoding=args.encoding, threads=args.threads, progress=progress.stage("decomposing"))
+        except ValueError as exc:
+            if str(exc).startswith(("points", "normals", "all points")):  # about the file's data: name it
+                raise ValueError(f"{args.input}: {exc}") from None
+            raise
         elapsed = time.perf_counter() - start
         progress.stage("levels")
         k = dec.n_bands

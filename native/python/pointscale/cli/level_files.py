@@ -32,8 +32,12 @@ def reconstruct_with_normals(dec, gains, base, threads: int, progress):
 
 
 def detail_attribute_name(scan) -> str:
-    """'detail', unless the input has a property of that name already."""
-    return "detail" if "detail" not in scan.vertex_attributes else "pointscale_detail"
+    """'detail', or the first of pointscale_detail, pointscale_detail_2, ... the input lacks."""
+    name, number = "detail", 1
+    while name in scan.vertex_attributes:
+        number += 1
+        name = "pointscale_detail" if number == 2 else f"pointscale_detail_{number - 1}"
+    return name
 
 
 # Formats with room for a vertex scalar of our own; the others would drop the detail with a warning.

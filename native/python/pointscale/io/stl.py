@@ -58,10 +58,11 @@ def read_stl(path) -> Scan:
 
 
 def write_stl(path, scan: Scan) -> None:
-    """Writes binary STL (float32) of the scan's faces; polygons are split into fans of triangles."""
+    """Writes the scan's faces as STL, polygons split into fans of triangles: binary (float32)
+    for float32 scans, ASCII (shortest exact decimals) for float64 ones, which binary would round."""
     path = os.fspath(path)
     trimesh = _trimesh()
-    from trimesh.exchange.stl import export_stl
+    from trimesh.exchange.stl import export_stl, export_stl_ascii
     if scan.n_faces == 0:
         raise ValueError(f"{path}: STL stores triangles and this scan has no faces (write .ply or .xyz instead)")
     dropped = list(scan.vertex_attributes) + list(scan.face_attributes) + (["normals"] if scan.normals is not None
@@ -69,7 +70,7 @@ def write_stl(path, scan: Scan) -> None:
     if dropped:
         warnings.warn(f"{path}: STL has no place for {', '.join(dropped)}; not written", stacklevel=3)
     mesh = trimesh.Trimesh(vertices=scan.points, faces=_triangles(scan.faces), process=False, validate=False)
-    data = export_stl(mesh)
+    data = export_stl(mesh) if scan.precision == np.float32 else export_stl_ascii(mesh).encode("ascii")
     with atomic_write(path) as temporary:
         with open(temporary, "wb") as f:
             f.write(data)
