@@ -17,9 +17,12 @@
 #include "pointscale/sample_spacing.h"
 #include "pointscale/self_knn.h"
 #include "pointscale/spatial_order.h"
+#include "python_progress.h"
 
 namespace py = pybind11;
 using namespace pointscale;
+using pointscale_bindings::PythonProgress;
+using pointscale_bindings::without_gil;
 
 namespace {
 
@@ -60,46 +63,6 @@ py::array_t<T> to_array(const std::vector<T>& v, std::vector<py::ssize_t> shape)
   py::array_t<T> out(shape);
   std::copy(v.begin(), v.end(), out.mutable_data());
   return out;
-}
-
-// Wraps a Python callable as a ProgressCallback. A Python exception raised inside it cancels the
-// work and is re-raised once the GIL is back.
-struct PythonProgress {
-  py::object callable;
-  ProgressCallback callback;
-  explicit PythonProgress(py::object c) : callable(std::move(c)) {
-    if (callable.is_none()) return;
-    callback = [this](double fraction) -> bool {
-      py::gil_scoped_acquire gil;
-      py::object r;
-      try {
-        r = callable(fraction);
-      } catch (py::error_already_set& e) {
-        e.restore();
-        return false;
-      }
-      if (r.is_none()) return true;
-      try {
-        return r.cast<bool>();
-      } catch (const py::cast_error&) {  // a string, a list...: a ValueError, not pybind's cast error
-        PyErr_Format(PyExc_ValueError, "progress must return True, False or None, got a %s", Py_TYPE(r.ptr())->tp_name);
-        return false;
-      }
-    };
-  }
-  const ProgressCallback* get() const { return callback ? &callback : nullptr; }
-};
-
-// Runs f without the GIL; turns a cancellation caused by a Python exception into that exception.
-template <class F>
-auto without_gil(F&& f) {
-  try {
-    py::gil_scoped_release release;
-    return f();
-  } catch (const Cancelled&) {
-    if (PyErr_Occurred()) throw py::error_already_set();
-    throw;
-  }
 }
 
 // (#P by k indices, #P by k squared distances) of every point's k nearest among `points`,

@@ -10,9 +10,12 @@
 #include "pointscale/morph.h"
 #include "pointscale/ray_shooting.h"
 #include "pointscale/sample_spacing.h"
+#include "python_progress.h"
 
 namespace py = pybind11;
 using namespace pointscale;
+using pointscale_bindings::PythonProgress;
+using pointscale_bindings::without_gil;
 
 namespace {
 
@@ -36,43 +39,6 @@ struct OptionalPoints {
   }
   const Points* get() const { return present ? &p : nullptr; }
 };
-
-struct PythonProgress {
-  py::object callable;
-  ProgressCallback callback;
-  explicit PythonProgress(py::object c) : callable(std::move(c)) {
-    if (callable.is_none()) return;
-    callback = [this](double fraction) -> bool {
-      py::gil_scoped_acquire gil;
-      py::object r;
-      try {
-        r = callable(fraction);
-      } catch (py::error_already_set& e) {
-        e.restore();
-        return false;
-      }
-      if (r.is_none()) return true;
-      try {
-        return r.cast<bool>();
-      } catch (const py::cast_error&) {  // a string, a list...: a ValueError, not pybind's cast error
-        PyErr_Format(PyExc_ValueError, "progress must return True, False or None, got a %s", Py_TYPE(r.ptr())->tp_name);
-        return false;
-      }
-    };
-  }
-  const ProgressCallback* get() const { return callback ? &callback : nullptr; }
-};
-
-template <class F>
-auto without_gil(F&& f) {
-  try {
-    py::gil_scoped_release release;
-    return f();
-  } catch (const Cancelled&) {
-    if (PyErr_Occurred()) throw py::error_already_set();
-    throw;
-  }
-}
 
 MlsOptions mls_options(int neighbors, double tolerance, int max_iterations) {
   MlsOptions o;
