@@ -134,7 +134,7 @@ def cmd_decompose(args) -> None:
             writers.submit(lambda: io.write(level_tmp[k], level_scan(scan, levels[k], normals[k], None, extension)),
                            level_tmp[k], level_files[k])
             writers.wait()
-        written = {out / DECOMPOSITION_FILE, out / SOURCE_FILE} | {out / level_name(l, extension) for l in range(k + 1)}
+        written = {out / DECOMPOSITION_FILE, out / SOURCE_FILE, *level_files}
         staged.commit(remove_after=[p for p in earlier if p not in written])
     print(f"decomposed {args.input} in {elapsed:.2f} s")
     print(describe(dec, scan))
