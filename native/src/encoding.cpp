@@ -8,6 +8,7 @@
 #include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
 #include "pointscale/plane_fit.h"
+#include "pointscale/reconstruction.h"
 #include "pointscale/sample_spacing.h"
 
 namespace pointscale {
@@ -278,6 +279,7 @@ MultiscaleModel encode_onto(const Points& points, const Points& base, const Poin
   report.pinned = aligned.kept;
   model.reports.push_back(report);
   all.report(1.0);
+  prepare_for_edits(model);
   return model;
 }
 

@@ -6,53 +6,99 @@
 
 namespace pointscale {
 
-void reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p, bool edited,
-                                 const std::vector<Mat3>* reference_rotation, Reconstruction* kept, int upto,
-                                 const ProgressCallback* progress, ReconstructionWorkspace* workspace) {
+EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p,
+                                               bool edited, Reconstruction* kept, int upto,
+                                               const ProgressCallback* progress, ReconstructionWorkspace* workspace) {
   const int k = model.bands();
   if (upto < 0 || upto > k) upto = k;
   const bool per_point = gains.cols() > 1;
   const ProgressStage all{progress, 0.0, 1.0};
+  ReconstructionWorkspace own;
+  ReconstructionWorkspace& ws = workspace ? *workspace : own;
+  EditRotationReport report;
+  // An edited base: each point's turn, and the levels of the stored base built beside the
+  // edited ones. Their normals, turned, are the edited levels' normals; with nothing edited
+  // every turn is exactly the identity and the result is bit for bit the unedited one.
+  const bool turned = edited && upto > 0;
+  if (turned) {
+    const std::vector<Mat3> clusters = transported_rotations(model.base, p, model.support[0]);
+    ws.rotation = edit_rotations(model.base, p, model.base_rings, model.ring_size, clusters, model.support[0].labels,
+                                 &report);
+  }
+  Points& fitted = turned ? ws.unedited : p;  // the level each level's normals are fitted to
+  // Normals fitted once for these gains are reused (they do not depend on the edit).
+  const bool cache = turned && workspace;
+  const bool cached = cache && ws.unedited_normals.size() >= static_cast<std::size_t>(upto) &&
+                      ws.unedited_gains.rows() == gains.rows() && ws.unedited_gains.cols() == gains.cols() &&
+                      (ws.unedited_gains.array() == gains.array()).all();
+  if (turned && !cached) ws.unedited = model.base;
+  if (cache && !cached) {
+    ws.unedited_gains.resize(0, 0);  // valid again only once every level is in
+    ws.unedited_normals.resize(static_cast<std::size_t>(k));
+  }
   if (kept) kept->levels.push_back(p);
   // Level l's normals orient level l + 1's. They are computed into whichever of two buffers
   // the level before does not hold, so each level reuses the storage of the one before it.
-  // The unedited base's normals are the stored ones, bit for bit (decompose made them with
-  // the same function and oriented them), so level 0 then reads them in place.
-  ReconstructionWorkspace own;
-  ReconstructionWorkspace& ws = workspace ? *workspace : own;
+  // The stored base's normals are the stored ones, bit for bit (decompose made them with the
+  // same function and oriented them), so level 0 reads them in place.
   const Points* previous = &model.base_normals;
   for (int l = 0; l < upto; ++l) {
     const LevelSupport& s = model.support[l];
     const ProgressStage stage = all.sub(double(l) / upto, double(l + 1) / upto);
     const Points* normals = previous;
-    if (l > 0 || edited) {
-      Points& into = previous == &ws.normals[0] ? ws.normals[1] : ws.normals[0];
+    if (l > 0 && cached) {
+      normals = &ws.unedited_normals[static_cast<std::size_t>(l)];
+    } else if (l > 0) {
+      Points& into = cache ? ws.unedited_normals[static_cast<std::size_t>(l)]
+                           : previous == &ws.normals[0] ? ws.normals[1] : ws.normals[0];
       const LabelGroups* groups = static_cast<std::size_t>(l) < ws.groups.size() ? &ws.groups[l] : nullptr;
-      level_normals(p, s, *previous, stage, into, l == 0 ? reference_rotation : nullptr, groups,
-                    workspace ? &ws.centroids : nullptr);
+      level_normals(fitted, s, *previous, stage, into, nullptr, groups, workspace ? &ws.centroids : nullptr);
       normals = &into;
     }
     const Points& nrm = *normals;
+    Points applied;
+    if (kept && turned) applied.resize(p.rows(), 3);
     parallel_for(static_cast<std::size_t>(p.rows()), [&](std::size_t b, std::size_t e) {
       for (std::size_t ii = b; ii < e; ++ii) {
         const Eigen::Index i = static_cast<Eigen::Index>(ii);
         const double g = per_point ? gains(l, i) : gains(l, 0);
-        p.row(i) += (g * model.details(l, i)) * nrm.row(i);
+        const double offset = g * model.details(l, i);
+        if (turned) {
+          const Mat3& turn = ws.rotation[static_cast<std::size_t>(model.base_feet[ii])];
+          const Eigen::RowVector3d n = (turn * nrm.row(i).transpose()).transpose();
+          p.row(i) += offset * n;
+          if (!cached) ws.unedited.row(i) += offset * nrm.row(i);
+          if (kept) applied.row(i) = n;
+        } else {
+          p.row(i) += offset * nrm.row(i);
+        }
       }
     }, {}, 4096);
-    if (kept) { kept->levels.push_back(p); kept->normals.push_back(nrm); }
+    if (kept) { kept->levels.push_back(p); kept->normals.push_back(turned ? std::move(applied) : nrm); }
     previous = normals;
   }
+  if (cache && !cached && upto == k) ws.unedited_gains = gains;
+  if (cache) Points().swap(ws.unedited);  // only fitting needs it, and the normals are kept
+  return report;
+}
+
+void prepare_for_edits(MultiscaleModel& model) {
+  model.base_rings = base_rings(model.base);
+  model.ring_size = ring_size_for(model.base.rows());
+  model.base_feet.clear();
+  const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
+  const Points finest = reconstruct(model, ones, nullptr, false).positions;
+  model.base_feet = base_feet(model.base, model.base_normals, finest);
 }
 
 namespace {
 
 Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points p, bool edited,
-                                  const std::vector<Mat3>* reference_rotation, bool keep_levels, int upto,
-                                  const ProgressCallback* progress, ReconstructionWorkspace* workspace) {
+                                  bool keep_levels, int upto, const ProgressCallback* progress,
+                                  ReconstructionWorkspace* workspace) {
   Reconstruction out;
-  reconstruct_levels_in_place(model, gains, p, edited, reference_rotation, keep_levels ? &out : nullptr, upto,
-                              progress, workspace);
+  out.edit = reconstruct_levels_in_place(model, gains, p, edited, keep_levels ? &out : nullptr, upto, progress,
+                                         workspace);
   out.positions = std::move(p);
   return out;
 }
@@ -63,14 +109,13 @@ Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& 
                            bool keep_levels, int upto, const ProgressCallback* progress,
                            ReconstructionWorkspace* workspace) {
   if (base) return reconstruct_from_base(model, gains, *base, keep_levels, upto, progress, workspace);
-  return reconstruct_levels(model, gains, model.base, false, nullptr, keep_levels, upto, progress, workspace);
+  return reconstruct_levels(model, gains, model.base, false, keep_levels, upto, progress, workspace);
 }
 
 Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points base,
                                      bool keep_levels, int upto, const ProgressCallback* progress,
                                      ReconstructionWorkspace* workspace) {
-  const std::vector<Mat3> rotation = transported_rotations(model.base, base, model.support[0]);
-  return reconstruct_levels(model, gains, std::move(base), true, &rotation, keep_levels, upto, progress, workspace);
+  return reconstruct_levels(model, gains, std::move(base), true, keep_levels, upto, progress, workspace);
 }
 
 }  // namespace pointscale

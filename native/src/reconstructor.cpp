@@ -33,6 +33,18 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) {
     }
   }, {}, 4096);
 
+  model_.ring_size = model.ring_size;
+  model_.base_rings.resize(model.base_rings.size());
+  const std::size_t ring = static_cast<std::size_t>(model.ring_size);
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+    for (std::size_t r = b; r < e; ++r)
+      for (std::size_t j = 0; j < ring; ++j)
+        model_.base_rings[r * ring + j] = rank[model.base_rings[static_cast<std::size_t>(order_[r]) * ring + j]];
+  }, {}, 4096);
+
+  model_.base_feet.resize(model.base_feet.size());
+  for (std::size_t r = 0; r < model_.base_feet.size(); ++r) model_.base_feet[r] = rank[model.base_feet[order_[r]]];
+
   model_.support.resize(static_cast<std::size_t>(k));
   workspace_.groups.resize(static_cast<std::size_t>(k));
   for (int l = 0; l < k; ++l) {
@@ -82,10 +94,7 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
     }, {}, 4096);
     g = &gains_;
   }
-  std::vector<Mat3> rotation;
-  if (edited) rotation = transported_rotations(model_.base, level_, model_.support[0]);
-  reconstruct_levels_in_place(model_, *g, level_, edited, edited ? &rotation : nullptr, nullptr, -1, progress,
-                              &workspace_);
+  reconstruct_levels_in_place(model_, *g, level_, edited, nullptr, -1, progress, &workspace_);
   Points out(n, 3);
   const Eigen::RowVector3d shift = origin.transpose();
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {

@@ -1,9 +1,13 @@
-// Reconstruction (Eq. 9-11): displace P^0 level by level along normals recomputed from the
-// current points of each level, so an edited base carries the detail along its new normals.
+// Reconstruction (Eq. 9-11): displace P^0 level by level along each level's normals. The
+// normals of a level are fitted to its current points (so band gains bend the finer detail
+// with the coarser), on the stored base; an edited base turns them, point by point, as the
+// edit turns the base around that point (edit_rotations.h), so the detail follows an edit of
+// any scale upright.
 #pragma once
 #include <vector>
 
 #include "pointscale/decomposition.h"
+#include "pointscale/edit_rotations.h"
 #include "pointscale/spatial_order.h"
 
 namespace pointscale {
@@ -12,6 +16,7 @@ struct Reconstruction {
   Points positions;             // #P by 3, the finest level
   std::vector<Points> levels;   // P^0..P^k when asked for, else empty
   std::vector<Points> normals;  // n^0..n^{k-1} when asked for, else empty
+  EditRotationReport edit;      // how the edit's turns were measured (all zero when unedited)
 };
 
 // What a caller that reconstructs over and over (Reconstructor) keeps between calls.
@@ -19,6 +24,13 @@ struct ReconstructionWorkspace {
   std::vector<LabelGroups> groups;  // per level: its points grouped like support.local, or empty
   Points normals[2];                // two levels' normals, alternating
   Points centroids;                 // a level's anchors
+  std::vector<Mat3> rotation;       // an edited base: each point's turn
+  Points unedited;                  // an edited base: the level as the stored base gives it
+  // An edited base: the stored base's level normals for the gains last used, 1..levels - 1
+  // (level 0's are the model's). They do not depend on the edit, so an editing session that
+  // keeps its gains fits them once.
+  Eigen::MatrixXd unedited_gains;
+  std::vector<Points> unedited_normals;
 };
 
 // gains     k by 1 (per band) or k by #P (per point); band l is scaled by its gain
@@ -36,12 +48,17 @@ Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::
                                      bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr,
                                      ReconstructionWorkspace* workspace = nullptr);
 
+// Fills the model's rings and feet (edit_rotations.h) from its base and its own unedited
+// reconstruction; every function that makes a model calls it last.
+void prepare_for_edits(MultiscaleModel& model);
+
 // The level loop that both of the above and Reconstructor run, on p (P^0 in, the finest level
-// out). edited: p is not the stored base, so level 0's normals are fitted and oriented by the
-// stored ones turned by reference_rotation (#C); kept: receives every level and its normals
-// when not null; workspace: null, or what the caller keeps between calls.
-void reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p, bool edited,
-                                 const std::vector<Mat3>* reference_rotation, Reconstruction* kept, int upto,
-                                 const ProgressCallback* progress, ReconstructionWorkspace* workspace);
+// out). edited: p may differ from the stored base, so the levels of the stored base are built
+// beside it, and each level's normals, fitted there, are turned by the edit's rotation at each
+// point; kept: receives every level and its normals when not null; workspace: null, or what
+// the caller keeps between calls. Returns how the edit's turns were measured.
+EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p,
+                                               bool edited, Reconstruction* kept, int upto,
+                                               const ProgressCallback* progress, ReconstructionWorkspace* workspace);
 
 }  // namespace pointscale

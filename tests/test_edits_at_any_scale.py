@@ -1,0 +1,234 @@
+"""Detail follows an edit of the base at the edit's own scale (Sec. 8.1, Fig. 5).
+
+Each level's normals are turned, point by point, by the rotation the edit gives the base
+under the point (edit_rotations.h). The reference normals here come from the edit itself
+(an analytic lift) or from an independent PCA of the edited base, never from the engine.
+"""
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import pointscale as ps
+from helpers import diagonal, shared_model
+
+
+def gaussian_lift(base, centre, radius, height):
+    lifted = base.copy()
+    lifted[:, 2] += height * np.exp(-((base[:, :2] - centre) ** 2).sum(axis=1) / radius**2)
+    return lifted
+
+
+def lift_normal(xy, centre, radius, height):
+    """The analytic unit normal of z = height exp(-|xy - centre|^2 / radius^2) (+ a constant)."""
+    d = np.atleast_2d(xy) - centre
+    g = height * np.exp(-(d**2).sum(axis=1) / radius**2) * (-2.0 / radius**2)
+    n = np.column_stack([-g * d[:, 0], -g * d[:, 1], np.ones(len(d))])
+    return n / np.linalg.norm(n, axis=1)[:, None]
+
+
+def handle_axis_angles(result, points, handle, centres, normal_at):
+    """Degrees between each handle's axis (bottom ring to top face) and normal_at(centre)."""
+    out = []
+    for h, centre in enumerate(centres):
+        mine = handle == h
+        top = mine & (points[:, 2] > points[mine, 2].max() - 1e-6)
+        low = mine & (points[:, 2] < points[mine, 2].min() + 1e-6)
+        axis = result[top].mean(axis=0) - result[low].mean(axis=0)
+        cosine = abs(axis @ normal_at(centre)) / np.linalg.norm(axis)
+        out.append(np.degrees(np.arccos(min(1.0, cosine))))
+    return np.array(out)
+
+
+# Tall handles on a plane 2 units wide, 0.5 apart: (width, height, sample spacing, decimation,
+# levels), with enough levels for a flat base under them. "tall" is 4 times taller than wide
+# and stands 5 widths apart; "slender" is 3.1 times taller and 6.25 widths apart.
+SHAPES = {
+    ("tall", 0.1): (0.1, 0.4, 0.02, 0.1, 4),
+    ("tall", 0.2): (0.1, 0.4, 0.014, 0.2, 6),
+    ("slender", 0.1): (0.08, 0.25, 0.025, 0.1, 4),
+}
+
+
+@pytest.fixture(scope="module")
+def handle_models():
+    models = {}
+    for (name, decimation), (width, height, spacing, _, levels) in SHAPES.items():
+        points, handle, centres = ps.shapes.handles_plane(size=2.0, count=4, width=width, height=height,
+                                                          spacing=spacing)
+        for kernel in (1.0, 2.0):
+            dec = ps.decompose(points, levels=levels, decimation=decimation, kernel=kernel)
+            models[name, decimation, kernel] = (points, handle, centres, dec, height)
+    return models
+
+
+def lifts(centres, spacing):
+    """Bumps centred on a handle and between handles, radii 3/4 of the spacing to twice it."""
+    on = centres[9]
+    between = centres[5] + spacing / 2
+    for centre in (on, between):
+        for factor in (0.75, 1.0, 1.5, 2.0):
+            yield centre, factor * spacing
+
+
+@pytest.mark.parametrize("key", [(name, decimation, kernel) for name, decimation in SHAPES for kernel in (1.0, 2.0)])
+def test_tall_handles_stand_on_the_lifted_base(handle_models, key):
+    points, handle, centres, dec, height = handle_models[key]
+    assert np.ptp(dec.base[:, 2]) < 0.25 * height  # the handles are in the detail, not the base
+    spacing = 0.5
+    for centre, radius in lifts(centres, spacing):
+        lift = 0.5 * radius
+        result = ps.reconstruct(dec, base=gaussian_lift(dec.base, centre, radius, lift))
+        angles = handle_axis_angles(result, points, handle, centres,
+                                    lambda c: lift_normal(c, centre, radius, lift)[0])
+        bound = 3.0 if radius >= spacing else 6.0
+        assert angles.max() < bound, (centre, radius, angles.round(2))
+
+
+def test_steep_lifts_keep_tall_handles_nearly_upright(handle_models):
+    """Lifts as high as they are wide (slopes up to 40 degrees): measured up to 3.4 degrees."""
+    points, handle, centres, dec, _ = handle_models["tall", 0.2, 1.0]
+    worst = 0.0
+    for centre, radius in lifts(centres, 0.5):
+        result = ps.reconstruct(dec, base=gaussian_lift(dec.base, centre, radius, radius))
+        angles = handle_axis_angles(result, points, handle, centres,
+                                    lambda c: lift_normal(c, centre, radius, radius)[0])
+        worst = max(worst, angles.max())
+    assert worst < 4.5
+
+
+def test_every_band_is_applied_along_the_lifted_surface_normal():
+    """Requirement 2: a flat base with gentle detail, lifted; at every level the direction a
+    band moves its points along is the lifted surface's normal there."""
+    points = ps.shapes.wavy_patch(40000, coarse=0.0, fine=0.002, fine_frequency=14.0)
+    dec = ps.decompose(points, levels=4, kernel=2.0)
+    centre, radius, height = np.array([0.2, -0.1]), 0.5, 0.3
+    lifted = gaussian_lift(dec.base, centre, radius, height)
+    levels = ps.reconstruct_levels(dec, base=lifted)
+    reference = lift_normal(dec.base[:, :2], centre, radius, height)
+    for l in range(dec.n_bands):
+        d = dec.details[l]
+        use = np.abs(d) > 1e-6 * diagonal(points)
+        direction = (levels[l + 1] - levels[l])[use] / d[use, None]
+        angle = np.degrees(np.arccos(np.clip(np.abs(np.einsum("ij,ij->i", direction, reference[use])), 0, 1)))
+        assert np.median(angle) < 1.0 and np.percentile(angle, 99) < 3.0, (l, np.median(angle),
+                                                                           np.percentile(angle, 99))
+
+
+def test_a_local_edit_leaves_the_rest_as_it_was():
+    points = ps.shapes.bumpy_sphere(20000)
+    dec = ps.decompose(points, levels=4)
+    base = dec.base
+    centre = base[0]
+    far = np.linalg.norm(base - centre, axis=1)
+    edited = base + (np.clip(1 - far / 0.3, 0, None) ** 2)[:, None] * 0.1 * dec.normals(0)[0]
+    result = ps.reconstruct(dec, base=edited)
+    untouched = far > 0.6  # beyond the edit and every ring and foot that reaches into it
+    assert untouched.sum() > 10000
+    # Equal to the rounding of handing the base through the decomposition's origin.
+    assert np.abs(result[untouched] - ps.reconstruct(dec)[untouched]).max() <= 1e-15 * diagonal(points)
+    moved = far < 0.25
+    assert np.abs(result[moved] - ps.reconstruct(dec)[moved]).max() > 0.01
+
+
+def test_the_solver_and_the_free_function_agree_bit_for_bit_on_an_edit():
+    points = ps.shapes.bumpy_sphere(20000)
+    dec = ps.decompose(points, levels=4)
+    edited = gaussian_lift(dec.base, np.array([0.3, 0.2]), 0.6, 0.3)
+    solver = ps.Reconstructor(dec)
+    first = ps.reconstruct(dec, base=edited)
+    np.testing.assert_array_equal(solver.reconstruct(base=edited), first)
+    np.testing.assert_array_equal(ps.reconstruct(dec, base=edited), first)  # again, from the kept normals
+    gains = [1.5, 1.0, 0.5]
+    np.testing.assert_array_equal(solver.reconstruct(gains, base=edited), ps.reconstruct(dec, gains, base=edited))
+
+
+def test_files_without_rings_get_them_found_again(tmp_path):
+    points = ps.shapes.bumpy_sphere(8000)
+    dec = ps.decompose(points, levels=3)
+    arrays = dict(dec.to_dict())
+    assert arrays["base_rings"].shape == (len(points), 13) and arrays["base_feet"].shape == (len(points),)
+    older = {k: v for k, v in arrays.items() if k not in ("base_rings", "base_feet")}
+    again = ps.Decomposition.from_dict(older)
+    np.testing.assert_array_equal(again.to_dict()["base_rings"], arrays["base_rings"])
+    np.testing.assert_array_equal(again.to_dict()["base_feet"], arrays["base_feet"])
+    edited = gaussian_lift(dec.base, np.array([0.0, 0.3]), 0.5, 0.2)
+    np.testing.assert_array_equal(ps.reconstruct(again, base=edited), ps.reconstruct(dec, base=edited))
+    bad = dict(arrays, base_feet=np.full(len(points), len(points), dtype=np.int32))
+    with pytest.raises(ValueError, match="base_feet"):
+        ps.Decomposition.from_dict(bad)
+
+
+# Real scans: brush lifts and a bend of one part by 60 degrees.
+
+def pca_normals(points, reference, k=24):
+    nbr = cKDTree(points).query(points, k)[1]
+    q = points[nbr] - points[nbr].mean(axis=1, keepdims=True)
+    n = np.linalg.eigh(np.einsum("nki,nkj->nij", q, q))[1][:, :, 0]
+    return n * np.where(np.einsum("ij,ij->i", n, reference) < 0, -1.0, 1.0)[:, None]
+
+
+def brush(base, normals, centre, radius, height):
+    """A Draw-like brush along the centre's normal, smooth falloff, front faces only."""
+    d = np.linalg.norm(base - base[centre], axis=1)
+    t = np.clip(1 - d / radius, 0, 1)
+    weight = t * t * (3 - 2 * t) * np.clip(normals @ normals[centre], 0, 1)
+    return base + height * weight[:, None] * normals[centre]
+
+
+def bend(base, along, towards, start, angle_degrees):
+    """A Simple-Deform-like bend of the part beyond `start` (along `along`) towards `towards`,
+    over the first half of that part, rigid beyond: returns (edited, each point's angle)."""
+    o = base.mean(axis=0)
+    t = (base - o) @ along - start
+    s = (base - o) @ towards
+    angle = np.radians(angle_degrees)
+    width = 0.5 * t.max()
+    rho = width / angle
+    theta = np.clip(t, 0, width) / rho
+    rest = np.maximum(t - width, 0)
+    r = rho - s
+    dt = r * np.sin(theta) + rest * np.cos(theta)
+    ds = rho - r * np.cos(theta) + rest * np.sin(theta)
+    out = base + (dt - np.maximum(t, 0))[:, None] * along + (ds - s)[:, None] * towards
+    return np.where((t > 0)[:, None], out, base), theta
+
+
+@pytest.fixture(scope="module", params=["max_planck.ply", "bunny.ply"])
+def scan(request):
+    points = ps.io.read(shared_model(request.param)).points
+    dec = ps.decompose(points, levels=4)
+    return request.param, points, dec
+
+
+def offset_lengths_kept(dec, edited):
+    """Largest relative change in the length of a detail offset (finest level minus base) over
+    the points the edit moved."""
+    base, diag = dec.base, diagonal(dec.base)
+    before = np.linalg.norm(ps.reconstruct(dec) - base, axis=1)
+    after = np.linalg.norm(ps.reconstruct(dec, base=edited) - edited, axis=1)
+    use = (np.linalg.norm(edited - base, axis=1) > 1e-9 * diag) & (before > 1e-9 * diag)
+    assert use.sum() > 100
+    return (np.abs(after / before - 1)[use]).max()
+
+
+# The offsets turn with the base: their lengths stay. Their angle to an independent 24-point
+# PCA normal of the edited base is not yet within the issue's 3 degrees everywhere on these
+# scans (issue 16 stays open on it), so it is not asserted here.
+@pytest.mark.parametrize("seed", [1, 7])
+def test_a_brush_lift_on_a_scan_keeps_every_offset_length(scan, seed):
+    name, points, dec = scan
+    diag = diagonal(dec.base)
+    normals = pca_normals(dec.base, dec.normals(0))
+    centre = np.random.default_rng(seed).integers(len(points))
+    radius = 0.1 * diag
+    assert offset_lengths_kept(dec, brush(dec.base, normals, centre, radius, 0.3 * radius)) < 1e-9
+
+
+def test_a_bend_of_one_part_on_a_scan_keeps_every_offset_length(scan):
+    name, points, dec = scan
+    extent = np.ptp(dec.base, axis=0)
+    order = np.argsort(extent)
+    along, towards = -np.eye(3)[order[2]], np.eye(3)[order[0]]
+    edited, theta = bend(dec.base, along, towards, 0.1 * extent.max(), 60.0)
+    assert np.degrees(theta.max()) == pytest.approx(60.0)
+    assert offset_lengths_kept(dec, edited) < 1e-9
