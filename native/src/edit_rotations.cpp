@@ -18,16 +18,25 @@ IndexList base_rings(const Points& base) {
 
 IndexList base_feet(const Points& base, const Points& base_normals, const Points& finest) {
   const SpatialIndex index(base);
+  constexpr int candidates = 16;
   IndexList feet(static_cast<std::size_t>(base.rows()));
   parallel_for(feet.size(), [&](std::size_t b, std::size_t e) {
+    Index nearest[candidates];
+    double d2[candidates];
     for (std::size_t i = b; i < e; ++i) {
       const Eigen::Index row = static_cast<Eigen::Index>(i);
       const Vec3 q = finest.row(row).transpose();
-      Index nearest = static_cast<Index>(i);
-      double d2 = 0.0;
-      if (index.knn(q.data(), 1, &nearest, &d2) < 1 || base_normals.row(nearest).dot(base_normals.row(row)) < 0.5)
-        nearest = static_cast<Index>(i);
-      feet[i] = nearest;
+      const double reach = 0.25 * (finest.row(row) - base.row(row)).norm();
+      const int found = index.knn(q.data(), candidates, nearest, d2);
+      feet[i] = static_cast<Index>(i);
+      for (int j = 0; j < found; ++j) {
+        const Index c = nearest[j];
+        if (c == static_cast<Index>(i)) break;  // the point's own base position comes first
+        if ((base.row(c) - base.row(row)).norm() <= reach && base_normals.row(c).dot(base_normals.row(row)) >= 0.5) {
+          feet[i] = c;
+          break;
+        }
+      }
     }
   }, {}, 4096);
   return feet;
@@ -58,27 +67,6 @@ Mat3 ring_covariance(const Ring& e, int m) {
   return c;
 }
 
-// The rotation about unit axis u by the angle whose cosine and sine are c and s.
-Mat3 about(const Vec3& u, double c, double s) {
-  Mat3 k;
-  k << 0, -u.z(), u.y(), u.z(), 0, -u.x(), -u.y(), u.x(), 0;
-  return c * Mat3::Identity() + s * k + (1.0 - c) * u * u.transpose();
-}
-
-// The least rotation taking unit a to unit b.
-Mat3 least_turn(const Vec3& a, const Vec3& b) {
-  const Vec3 v = a.cross(b);
-  const double c = a.dot(b);
-  if (c > -1.0 + 1e-12) {
-    Mat3 k;
-    k << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-    return Mat3::Identity() + k + (k * k) / (1.0 + c);
-  }
-  // Opposite: any half turn about an axis across a will do; the twist that follows fixes the rest.
-  Vec3 axis = a.unitOrthogonal();
-  return about(axis, -1.0, 0.0);
-}
-
 // The rotation best taking the ring's edges e0 onto e1 (Kabsch), for rings with no clear plane.
 Mat3 best_rotation(const Ring& e0, const Ring& e1, int m) {
   Mat3 h = Mat3::Zero();
@@ -103,8 +91,59 @@ double middle_eigenvalue(const Mat3& c, const Vec3& a) {
   return 0.5 * (sum - std::sqrt(disc));
 }
 
+// The unedited ring's plane: its normal, and whether it has a clear plane at all.
+RingKind ring_plane(const Ring& e0, int m, Vec3& normal) {
+  const Mat3 c0 = ring_covariance(e0, m);
+  const double t0 = c0.trace();
+  normal = t0 > 0.0 ? smallest_eigenvector(c0, t0) : Vec3::Zero();
+  if (normal.isZero()) return RingKind::on_a_line;
+  // A plane is clear when the ring spreads across it far more than off it.
+  if (normal.dot(c0 * normal) > 0.25 * middle_eigenvalue(c0, normal)) return RingKind::curved;
+  return RingKind::planar;
+}
+
+// The rotation of a ring with a clear plane: the linear map that best takes the unedited ring
+// onto the edited one within its plane (least squares over the ring's points about their
+// means), then the rotation nearest to it (2-D polar decomposition). A rigid turn of the ring
+// gives that turn exactly, since the unedited plane normal is uncorrelated with the ring's
+// spread across it; stretching the ring within its plane turns nothing.
+// a: the unedited plane's unit normal. Returns false where the ring folded over or collapsed.
+bool planar_rotation(const Ring& e0, const Ring& e1, int m, const Vec3& a, const Mat3& cluster, Mat3& rotation) {
+  const Vec3 t1 = a.unitOrthogonal(), t2 = a.cross(t1);
+  Vec3 m0 = Vec3::Zero(), m1 = Vec3::Zero();
+  for (int j = 0; j < m; ++j) { m0 += e0[j]; m1 += e1[j]; }
+  m0 /= m;
+  m1 /= m;
+  double g00 = 0.0, g01 = 0.0, g11 = 0.0;
+  Vec3 a0 = Vec3::Zero(), a1 = Vec3::Zero();
+  for (int j = 0; j < m; ++j) {
+    const Vec3 d0 = e0[j] - m0, d1 = e1[j] - m1;
+    const double u0 = d0.dot(t1), u1 = d0.dot(t2);
+    g00 += u0 * u0; g01 += u0 * u1; g11 += u1 * u1;
+    a0 += u0 * d1; a1 += u1 * d1;
+  }
+  const double det = g00 * g11 - g01 * g01;
+  if (!(det > 1e-12 * (g00 + g11) * (g00 + g11))) return false;
+  // The edited images of t1 and t2: columns of A G^-1.
+  const Vec3 c1 = (g11 * a0 - g01 * a1) / det, c2 = (g00 * a1 - g01 * a0) / det;
+  Vec3 b = c1.cross(c2);
+  const double bn = b.norm(), c1n = c1.norm();
+  if (!(bn > 0.0) || !(c1n > 0.0)) return false;
+  b /= bn;
+  if (b.dot(cluster * a) < 0.0) return false;  // the ring turned over: no rotation describes it
+  const Vec3 f1 = c1 / c1n, f2 = b.cross(f1);
+  double cs = c1n + c2.dot(f2), sn = -c2.dot(f1);
+  const double r = std::sqrt(cs * cs + sn * sn);
+  if (!(r > 0.0)) return false;
+  cs /= r;
+  sn /= r;
+  const Vec3 r1 = cs * f1 + sn * f2, r2 = cs * f2 - sn * f1;
+  rotation = r1 * t1.transpose() + r2 * t2.transpose() + b * a.transpose();
+  return true;
+}
+
 Mat3 ring_rotation(const Points& original, const Points& edited, const Index* ring, int m, const Mat3& cluster,
-                   double tolerance, RingKind& kind) {
+                   double tolerance, const Vec3* cached_normal, RingKind cached_kind, RingKind& kind) {
   Ring e0, e1;
   ring_edges(original, ring, m, e0);
   ring_edges(edited, ring, m, e1);
@@ -113,37 +152,45 @@ Mat3 ring_rotation(const Points& original, const Points& edited, const Index* ri
   double moved = 0.0;
   for (int j = 1; j < m; ++j) moved = std::max(moved, (e1[j] - e0[j]).cwiseAbs().maxCoeff());
   if (!(moved > tolerance)) { kind = RingKind::unchanged; return Mat3::Identity(); }
-  const Mat3 c0 = ring_covariance(e0, m), c1 = ring_covariance(e1, m);
-  const double t0 = c0.trace(), t1 = c1.trace();
-  const Vec3 a = t0 > 0.0 ? smallest_eigenvector(c0, t0) : Vec3::Zero();
-  const Vec3 b_raw = t1 > 0.0 ? smallest_eigenvector(c1, t1) : Vec3::Zero();
-  if (a.isZero() || b_raw.isZero()) { kind = RingKind::on_a_line; return cluster; }
-  // A plane is clear when the ring spreads across it far more than off it.
-  if (a.dot(c0 * a) > 0.25 * middle_eigenvalue(c0, a)) { kind = RingKind::curved; return best_rotation(e0, e1, m); }
-  kind = RingKind::planar;
-  const Vec3 b = b_raw.dot(cluster * a) < 0.0 ? Vec3(-b_raw) : b_raw;
-  const Mat3 turn = least_turn(a, b);
-  // The twist about b that best lines up the turned edges with the edited ones (2-D Procrustes
-  // in the edited plane). Edges that did not move give a zero sine: no twist.
-  double s = 0.0, c = 0.0;
-  for (int j = 1; j < m; ++j) {
-    const Vec3 u = turn * e0[j];
-    const Vec3& v = e1[j];
-    s += b.dot(u.cross(v));
-    c += u.dot(v) - u.dot(b) * v.dot(b);
-  }
-  const double r = std::hypot(s, c);
-  if (!(r > 0.0)) return turn;
-  return about(b, c / r, s / r) * turn;
+  Vec3 a;
+  if (cached_normal) { a = *cached_normal; kind = cached_kind; } else { kind = ring_plane(e0, m, a); }
+  if (kind == RingKind::curved) return best_rotation(e0, e1, m);
+  Mat3 rotation;
+  if (kind == RingKind::planar && planar_rotation(e0, e1, m, a, cluster, rotation)) return rotation;
+  kind = RingKind::on_a_line;
+  return cluster;
 }
 
 }  // namespace
 
+EditRingPlanes ring_planes(const Points& original, const IndexList& rings, int ring_size) {
+  const std::size_t n = static_cast<std::size_t>(original.rows());
+  EditRingPlanes planes;
+  planes.normals.resize(n);
+  planes.kind.resize(n);
+  parallel_for(n, [&](std::size_t b, std::size_t e) {
+    Ring e0;
+    for (std::size_t i = b; i < e; ++i) {
+      ring_edges(original, rings.data() + i * static_cast<std::size_t>(ring_size), ring_size, e0);
+      planes.kind[i] = static_cast<unsigned char>(ring_plane(e0, ring_size, planes.normals[i]));
+    }
+  }, {}, 1024);
+  return planes;
+}
+
 std::vector<Mat3> edit_rotations(const Points& original, const Points& edited, const IndexList& rings,
                                  int ring_size, const std::vector<Mat3>& cluster_rotation, const IndexList& labels,
-                                 EditRotationReport* report) {
+                                 const EditRingPlanes* planes, EditRotationReport* report) {
+  std::vector<Mat3> rotation;
+  edit_rotations(original, edited, rings, ring_size, cluster_rotation, labels, planes, rotation, report);
+  return rotation;
+}
+
+void edit_rotations(const Points& original, const Points& edited, const IndexList& rings, int ring_size,
+                    const std::vector<Mat3>& cluster_rotation, const IndexList& labels, const EditRingPlanes* planes,
+                    std::vector<Mat3>& rotation, EditRotationReport* report) {
   const std::size_t n = static_cast<std::size_t>(original.rows());
-  std::vector<Mat3> rotation(n);
+  rotation.resize(n);
   std::atomic<std::size_t> counts[4] = {{0}, {0}, {0}, {0}};
   // Rounding of the base's coordinates, well below any edit an artist makes.
   const double tolerance = n > 0 ? 1e-12 * (original.colwise().maxCoeff() - original.colwise().minCoeff()).norm() : 0.0;
@@ -152,7 +199,9 @@ std::vector<Mat3> edit_rotations(const Points& original, const Points& edited, c
     for (std::size_t i = b; i < e; ++i) {
       RingKind kind;
       rotation[i] = ring_rotation(original, edited, rings.data() + i * static_cast<std::size_t>(ring_size), ring_size,
-                                  cluster_rotation[static_cast<std::size_t>(labels[i])], tolerance, kind);
+                                  cluster_rotation[static_cast<std::size_t>(labels[i])], tolerance,
+                                  planes ? &planes->normals[i] : nullptr,
+                                  planes ? static_cast<RingKind>(planes->kind[i]) : RingKind::planar, kind);
       ++local[static_cast<int>(kind)];
     }
     for (int t = 0; t < 4; ++t) counts[t] += local[t];
@@ -163,7 +212,6 @@ std::vector<Mat3> edit_rotations(const Points& original, const Points& edited, c
     report->curved = counts[2];
     report->on_a_line = counts[3];
   }
-  return rotation;
 }
 
 }  // namespace pointscale

@@ -22,8 +22,10 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   const bool turned = edited && upto > 0;
   if (turned) {
     const std::vector<Mat3> clusters = transported_rotations(model.base, p, model.support[0]);
-    ws.rotation = edit_rotations(model.base, p, model.base_rings, model.ring_size, clusters, model.support[0].labels,
-                                 &report);
+    if (workspace && ws.planes.normals.size() != static_cast<std::size_t>(p.rows()))
+      ws.planes = ring_planes(model.base, model.base_rings, model.ring_size);
+    edit_rotations(model.base, p, model.base_rings, model.ring_size, clusters, model.support[0].labels,
+                   workspace ? &ws.planes : nullptr, ws.rotation, &report);
   }
   Points& fitted = turned ? ws.unedited : p;  // the level each level's normals are fitted to
   // Normals fitted once for these gains are reused (they do not depend on the edit).

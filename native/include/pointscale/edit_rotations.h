@@ -21,29 +21,47 @@ inline int ring_size_for(Eigen::Index points) { return points < base_ring_size ?
 // Where each point's detail stands on the base: the base point nearest to the point itself
 // (its finest level), so that the detail turns with the base beneath it, not with the spot its
 // own base position happens to fall on (under tall detail the base positions of one feature
-// spread over more than the feature). A nearest base point whose normal faces away from the
-// point's own (another side of a thin part) is not taken: the point stands on its own.
+// spread over more than the feature, and a lift curving across that spread bent it). The foot
+// is taken only within a quarter of the point's offset from its own base position, and only
+// where the base faces the same way (normals within 60 degrees): where the base curves inward
+// under tall detail the nearest base point can lie anywhere, and the point's own base position
+// is the better guess. Otherwise the point stands on its own base position.
 // base, base_normals, finest  #P by 3. Returns #P base point indices.
 IndexList base_feet(const Points& base, const Points& base_normals, const Points& finest);
 
 // What edit_rotations found.
 struct EditRotationReport {
   std::size_t unchanged = 0;  // rings the edit left as they were, to rounding: the identity
-  std::size_t planar = 0;     // the turn of the ring's plane, then the twist about its normal
+  std::size_t planar = 0;     // the rotation nearest to the ring's best map within its plane
   std::size_t curved = 0;     // rings with no clear plane: the best rotation of the ring (Kabsch)
-  std::size_t on_a_line = 0;  // rings whose points lie on a line: the cluster's rotation
+  std::size_t on_a_line = 0;  // rings on a line, or turned over: the cluster's rotation
 };
+
+// The planes of the unedited rings, which no edit changes: what edit_rotations would find
+// again on every call. kind: 1 a clear plane, 2 no clear plane, 3 on a line (RingKind).
+struct EditRingPlanes {
+  std::vector<Vec3> normals;  // #P
+  std::vector<unsigned char> kind;  // #P
+};
+EditRingPlanes ring_planes(const Points& original, const IndexList& rings, int ring_size);
 
 // original, edited   #P by 3, the stored base and the edited one
 // rings              #P by ring_size, from base_rings(original)
 // cluster_rotation   #C rotations of the level-0 clusters (transported_rotations), with
-// labels             #P each point's level-0 cluster: they pick the side of an edited ring's
-//                    plane (so a turn past 90 degrees keeps its sign) and stand in where a
-//                    ring has no plane
+// labels             #P each point's level-0 cluster: they tell a ring that turned over from
+//                    one that turned past 90 degrees, and stand in where a ring has no plane
+//                    or turned over
+// planes             ring_planes(original, rings, ring_size), or nullptr to find them here
 // Returns #P rotations. A ring the edit did not change, to within 1e-12 of the base's
 // diagonal, gives exactly the identity, so an unedited round trip stays exact.
 std::vector<Mat3> edit_rotations(const Points& original, const Points& edited, const IndexList& rings,
                                  int ring_size, const std::vector<Mat3>& cluster_rotation, const IndexList& labels,
-                                 EditRotationReport* report = nullptr);
+                                 const EditRingPlanes* planes = nullptr, EditRotationReport* report = nullptr);
+
+// The same into `rotation`, reusing its storage (an editing session calls it over and over:
+// fresh pages cost a fault per 4 KB on first touch).
+void edit_rotations(const Points& original, const Points& edited, const IndexList& rings, int ring_size,
+                    const std::vector<Mat3>& cluster_rotation, const IndexList& labels, const EditRingPlanes* planes,
+                    std::vector<Mat3>& rotation, EditRotationReport* report = nullptr);
 
 }  // namespace pointscale

@@ -25,6 +25,7 @@ struct ReconstructionWorkspace {
   Points normals[2];                // two levels' normals, alternating
   Points centroids;                 // a level's anchors
   std::vector<Mat3> rotation;       // an edited base: each point's turn
+  EditRingPlanes planes;            // the unedited rings' planes, found on the first edit
   Points unedited;                  // an edited base: the level as the stored base gives it
   // An edited base: the stored base's level normals for the gains last used, 1..levels - 1
   // (level 0's are the model's). They do not depend on the edit, so an editing session that
