@@ -82,10 +82,17 @@ def decompose(ps, points: np.ndarray, progress=None, smoother="MLS", encoding="P
 def edited_base(dec, base: np.ndarray) -> np.ndarray | None:
     """``base`` (the 'Level 0' key) in double precision, or None while the key still holds the
     decomposition's own base (as a key stores it, in single precision): the engine then starts
-    from its exact base and reads level 0's normals instead of fitting them (a third faster)."""
-    b = np.asarray(base, dtype=np.float64)
-    if b.shape == dec.base.shape and np.array_equal(b.astype(np.float32), dec.base.astype(np.float32)):
+    from its exact base and reads level 0's normals instead of fitting them (a third faster).
+    Vertices the edit did not move get the exact base back, so the engine sees them unmoved
+    (it turns no detail there) rather than rounded to single precision."""
+    b = np.array(base, dtype=np.float64)
+    if b.shape != dec.base.shape:
+        return b
+    exact = dec.base
+    unmoved = (b.astype(np.float32) == exact.astype(np.float32)).all(axis=1)
+    if unmoved.all():
         return None
+    b[unmoved] = exact[unmoved]
     return b
 
 
