@@ -110,17 +110,18 @@ RingKind ring_plane(const Ring& e0, int m, Vec3& normal) {
 // a: the unedited plane's unit normal. Returns false where the ring folded over or collapsed.
 bool planar_rotation(const Ring& e0, const Ring& e1, int m, const Vec3& a, const Mat3& cluster, Mat3& rotation) {
   const Vec3 t1 = a.unitOrthogonal(), t2 = a.cross(t1);
-  Vec3 m0 = Vec3::Zero(), m1 = Vec3::Zero();
-  for (int j = 0; j < m; ++j) { m0 += e0[j]; m1 += e1[j]; }
+  Vec3 m0 = Vec3::Zero();
+  for (int j = 0; j < m; ++j) m0 += e0[j];
   m0 /= m;
-  m1 /= m;
+  // The ring's coordinates u in its plane sum to zero, so the edited ring's mean drops out of
+  // sum (e1 - mean1) u^T.
   double g00 = 0.0, g01 = 0.0, g11 = 0.0;
   Vec3 a0 = Vec3::Zero(), a1 = Vec3::Zero();
   for (int j = 0; j < m; ++j) {
-    const Vec3 d0 = e0[j] - m0, d1 = e1[j] - m1;
+    const Vec3 d0 = e0[j] - m0;
     const double u0 = d0.dot(t1), u1 = d0.dot(t2);
     g00 += u0 * u0; g01 += u0 * u1; g11 += u1 * u1;
-    a0 += u0 * d1; a1 += u1 * d1;
+    a0 += u0 * e1[j]; a1 += u1 * e1[j];
   }
   const double det = g00 * g11 - g01 * g01;
   if (!(det > 1e-12 * (g00 + g11) * (g00 + g11))) return false;

@@ -360,13 +360,17 @@ std::vector<Mat3> transported_rotations(const Points& original, const Points& ed
       const Index c = static_cast<Index>(cc);
       const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(c) * k;
       const double h = support.h(c);
+      rotation[cc] = Mat3::Identity();
+      // A neighbourhood the edit left as it was keeps the identity exactly, without a solve.
+      bool same = b0.row(c) == b1.row(c);
+      for (int j = 1; j < k && same; ++j) same = b0.row(nb[j]) == b1.row(nb[j]);
+      if (same) continue;
       Mat3 cov = Mat3::Zero();
       for (int j = 1; j < k; ++j) {
         const Vec3 e0 = (b0.row(nb[j]) - b0.row(c)).transpose();
         const Vec3 e1 = (b1.row(nb[j]) - b1.row(c)).transpose();
         cov.noalias() += std::exp(-e0.squaredNorm() / (h * h)) * e0 * e1.transpose();
       }
-      rotation[cc] = Mat3::Identity();
       const Eigen::JacobiSVD<Mat3> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
       const Eigen::Vector3d s = svd.singularValues();
       // A neighbourhood on a line does not fix the rotation about it: keep the identity there.
