@@ -9,7 +9,6 @@
 
 #include "pointscale/cluster_decimation.h"
 #include "pointscale/decomposition.h"
-#include "pointscale/edit_rotations.h"
 #include "pointscale/mls_projection.h"
 #include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
@@ -115,8 +114,6 @@ py::dict model_arrays(const MultiscaleModel& m) {
     d[("local_" + s).c_str()] = local_by_point(m.support[l]);  // saved in point order
   }
   d["labels"] = labels;
-  d["base_rings"] = to_array(m.base_rings, {n, m.ring_size});
-  d["base_feet"] = to_array(m.base_feet, {n});
   return d;
 }
 
@@ -193,22 +190,6 @@ MultiscaleModel model_from_arrays(const py::dict& d) {
     require(all_finite(local), "local coordinates hold NaN or infinite values at level " + s);
     local_from_points(local, sup);
   }
-  // Files saved before the rings and feet existed get them found again: both follow from the
-  // rest of the model, so they come out as decompose made them.
-  if (!d.contains("base_rings") || !d.contains("base_feet")) {
-    prepare_for_edits(m);
-    return m;
-  }
-  m.ring_size = ring_size_for(n);
-  auto rings = d["base_rings"].cast<IndexArray>();
-  require(rings.ndim() == 2 && rings.shape(0) == n && rings.shape(1) == m.ring_size,
-          "base_rings must be (" + std::to_string(n) + ", " + std::to_string(m.ring_size) + ")");
-  m.base_rings.assign(rings.data(), rings.data() + rings.size());
-  for (Index v : m.base_rings) require(v >= 0 && v < n, "base_rings holds a point index out of range");
-  auto feet = d["base_feet"].cast<IndexArray>();
-  require(feet.ndim() == 1 && feet.shape(0) == n, "base_feet must be (" + std::to_string(n) + ",)");
-  m.base_feet.assign(feet.data(), feet.data() + feet.size());
-  for (Index v : m.base_feet) require(v >= 0 && v < n, "base_feet holds a point index out of range");
   return m;
 }
 

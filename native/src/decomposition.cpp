@@ -9,7 +9,6 @@
 #include "pointscale/cluster_decimation.h"
 #include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
-#include "pointscale/reconstruction.h"
 #include "pointscale/release_memory.h"
 #include "pointscale/renumber_points.h"
 #include "pointscale/sample_spacing.h"
@@ -341,7 +340,6 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   std::vector<unsigned char>().swap(flipped);
   release_free_memory();
   renumber_model(model, original);
-  prepare_for_edits(model);
   last.report(1.0);
   return model;
 }

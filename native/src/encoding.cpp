@@ -8,7 +8,6 @@
 #include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
 #include "pointscale/plane_fit.h"
-#include "pointscale/reconstruction.h"
 #include "pointscale/sample_spacing.h"
 
 namespace pointscale {
@@ -279,7 +278,6 @@ MultiscaleModel encode_onto(const Points& points, const Points& base, const Poin
   report.pinned = aligned.kept;
   model.reports.push_back(report);
   all.report(1.0);
-  prepare_for_edits(model);
   return model;
 }
 

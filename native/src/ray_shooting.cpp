@@ -7,7 +7,6 @@
 #include "pointscale/encoding.h"
 #include "pointscale/parallel.h"
 #include "pointscale/plane_fit.h"
-#include "pointscale/reconstruction.h"
 #include "pointscale/sample_spacing.h"
 
 namespace pointscale {
@@ -202,7 +201,6 @@ MultiscaleModel decompose_rayshoot(const Points& points, const Points* input_nor
     reference = std::move(normals);
   }
   all.report(1.0);
-  prepare_for_edits(model);
   return model;
 }
 

@@ -22,10 +22,9 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   const bool turned = edited && upto > 0;
   if (turned) {
     const std::vector<Mat3> clusters = transported_rotations(model.base, p, model.support[0]);
-    if (workspace && ws.planes.normals.size() != static_cast<std::size_t>(p.rows()))
-      ws.planes = ring_planes(model.base, model.base_rings, model.ring_size);
-    edit_rotations(model.base, p, model.base_rings, model.ring_size, clusters, model.support[0].labels,
-                   workspace ? &ws.planes : nullptr, ws.rotation, &report);
+    if (ws.edit.feet.size() != static_cast<std::size_t>(p.rows())) ws.edit = edit_support(model);
+    edit_rotations(model.base, p, ws.edit.rings, ws.edit.ring_size, clusters, model.support[0].labels,
+                   &ws.edit.planes, ws.rotation, &report);
   }
   Points& fitted = turned ? ws.unedited : p;  // the level each level's normals are fitted to
   // Normals fitted once for these gains are reused (they do not depend on the edit).
@@ -66,7 +65,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
         const double g = per_point ? gains(l, i) : gains(l, 0);
         const double offset = g * model.details(l, i);
         if (turned) {
-          const Mat3& turn = ws.rotation[static_cast<std::size_t>(model.base_feet[ii])];
+          const Mat3& turn = ws.rotation[static_cast<std::size_t>(ws.edit.feet[ii])];
           const Eigen::RowVector3d n = (turn * nrm.row(i).transpose()).transpose();
           p.row(i) += offset * n;
           if (!cached) ws.unedited.row(i) += offset * nrm.row(i);
@@ -84,13 +83,15 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   return report;
 }
 
-void prepare_for_edits(MultiscaleModel& model) {
-  model.base_rings = base_rings(model.base);
-  model.ring_size = ring_size_for(model.base.rows());
-  model.base_feet.clear();
+EditSupport edit_support(const MultiscaleModel& model) {
+  EditSupport edit;
+  edit.rings = base_rings(model.base);
+  edit.ring_size = ring_size_for(model.base.rows());
+  edit.planes = ring_planes(model.base, edit.rings, edit.ring_size);
   const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
   const Points finest = reconstruct(model, ones, nullptr, false).positions;
-  model.base_feet = base_feet(model.base, model.base_normals, finest);
+  edit.feet = base_feet(model.base, model.base_normals, finest);
+  return edit;
 }
 
 namespace {

@@ -33,17 +33,27 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) {
     }
   }, {}, 4096);
 
-  model_.ring_size = model.ring_size;
-  model_.base_rings.resize(model.base_rings.size());
-  const std::size_t ring = static_cast<std::size_t>(model.ring_size);
-  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-    for (std::size_t r = b; r < e; ++r)
-      for (std::size_t j = 0; j < ring; ++j)
-        model_.base_rings[r * ring + j] = rank[model.base_rings[static_cast<std::size_t>(order_[r]) * ring + j]];
-  }, {}, 4096);
-
-  model_.base_feet.resize(model.base_feet.size());
-  for (std::size_t r = 0; r < model_.base_feet.size(); ++r) model_.base_feet[r] = rank[model.base_feet[order_[r]]];
+  // What an edit needs, found in the model's own numbering (so that rings with neighbours at
+  // equal distances list them as reconstruct() does), then renumbered.
+  {
+    const EditSupport from = edit_support(model);
+    EditSupport& to = workspace_.edit;
+    const std::size_t ring = static_cast<std::size_t>(from.ring_size);
+    to.ring_size = from.ring_size;
+    to.rings.resize(from.rings.size());
+    to.feet.resize(from.feet.size());
+    to.planes.normals.resize(from.planes.normals.size());
+    to.planes.kind.resize(from.planes.kind.size());
+    parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+      for (std::size_t r = b; r < e; ++r) {
+        const std::size_t i = static_cast<std::size_t>(order_[r]);
+        for (std::size_t j = 0; j < ring; ++j) to.rings[r * ring + j] = rank[from.rings[i * ring + j]];
+        to.feet[r] = rank[from.feet[i]];
+        to.planes.normals[r] = from.planes.normals[i];
+        to.planes.kind[r] = from.planes.kind[i];
+      }
+    }, {}, 4096);
+  }
 
   model_.support.resize(static_cast<std::size_t>(k));
   workspace_.groups.resize(static_cast<std::size_t>(k));

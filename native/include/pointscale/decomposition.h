@@ -38,10 +38,6 @@ struct MultiscaleModel {
   Points base_normals;               // #P by 3, oriented normals of P^0 (orientation reference)
   std::vector<LevelSupport> support; // k, the cached neighbourhoods of levels 0..k-1
   std::vector<LevelReport> reports;  // k, level 0 first
-  // How an edit of the base turns the detail (edit_rotations.h; prepare_for_edits fills them).
-  IndexList base_rings;              // #P by ring_size, base_rings(base)
-  int ring_size = 0;
-  IndexList base_feet;               // #P, base_feet(base, base_normals, the finest level)
   int bands() const { return static_cast<int>(details.rows()); }
 };
 

@@ -19,13 +19,21 @@ struct Reconstruction {
   EditRotationReport edit;      // how the edit's turns were measured (all zero when unedited)
 };
 
+// What an edited base needs: found once per model, since no edit changes it.
+struct EditSupport {
+  IndexList rings;       // #P by ring_size, base_rings(base)
+  int ring_size = 0;
+  IndexList feet;        // #P, base_feet(base, base_normals, the finest level)
+  EditRingPlanes planes; // ring_planes(base, rings, ring_size)
+};
+
 // What a caller that reconstructs over and over (Reconstructor) keeps between calls.
 struct ReconstructionWorkspace {
   std::vector<LabelGroups> groups;  // per level: its points grouped like support.local, or empty
   Points normals[2];                // two levels' normals, alternating
   Points centroids;                 // a level's anchors
+  EditSupport edit;                 // found on the first edited call
   std::vector<Mat3> rotation;       // an edited base: each point's turn
-  EditRingPlanes planes;            // the unedited rings' planes, found on the first edit
   Points unedited;                  // an edited base: the level as the stored base gives it
   // An edited base: the stored base's level normals for the gains last used, 1..levels - 1
   // (level 0's are the model's). They do not depend on the edit, so an editing session that
@@ -49,9 +57,10 @@ Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::
                                      bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr,
                                      ReconstructionWorkspace* workspace = nullptr);
 
-// Fills the model's rings and feet (edit_rotations.h) from its base and its own unedited
-// reconstruction; every function that makes a model calls it last.
-void prepare_for_edits(MultiscaleModel& model);
+// What an edited reconstruction needs beyond the model (edit_rotations.h), found from the
+// model alone: each base point's ring and its plane, and each point's foot (from the model's
+// own unedited reconstruction). About 0.3 of a decomposition's time; kept in the workspace.
+EditSupport edit_support(const MultiscaleModel& model);
 
 // The level loop that both of the above and Reconstructor run, on p (P^0 in, the finest level
 // out). edited: p may differ from the stored base, so the levels of the stored base are built

@@ -133,9 +133,6 @@ def _bad(what: str):
     return ValueError(f"not a valid decomposition: {what}")
 
 
-_RING_SIZE = 13  # base_ring_size in edit_rotations.h
-
-
 def _checked_arrays(arrays):
     """The arrays of a saved decomposition, checked and converted for _core.Model.from_arrays:
     (core arrays, origin, settings). Raises ValueError on the first thing wrong."""
@@ -233,9 +230,6 @@ def _checked_arrays(arrays):
         label_rows.append(row)
         out[f"local_{l}"] = floats(f"local_{l}", (n, 3))
     out["labels"] = np.ascontiguousarray(np.stack(label_rows))
-    if "base_rings" in arrays and "base_feet" in arrays:  # older files have none: the core finds them again
-        out["base_rings"] = indices("base_rings", (n, min(_RING_SIZE, n)), n, "points")
-        out["base_feet"] = indices("base_feet", (n,), n, "points")
     return out, origin, settings
 
 
