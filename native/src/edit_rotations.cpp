@@ -16,27 +16,35 @@ IndexList base_rings(const Points& base) {
   return knn_graph(SpatialIndex(base), ring_size_for(base.rows()));
 }
 
-IndexList base_feet(const Points& base, const Points& base_normals, const Points& finest) {
-  const SpatialIndex index(base);
-  constexpr int candidates = 16;
+IndexList base_feet(const Points& base, const Points& base_normals, const Points& finest, const IndexList& rings,
+                     int ring_size) {
   IndexList feet(static_cast<std::size_t>(base.rows()));
+  const std::size_t ring = static_cast<std::size_t>(ring_size);
   parallel_for(feet.size(), [&](std::size_t b, std::size_t e) {
-    Index nearest[candidates];
-    double d2[candidates];
     for (std::size_t i = b; i < e; ++i) {
       const Eigen::Index row = static_cast<Eigen::Index>(i);
-      const Vec3 q = finest.row(row).transpose();
-      const double reach = 0.25 * (finest.row(row) - base.row(row)).norm();
-      const int found = index.knn(q.data(), candidates, nearest, d2);
-      feet[i] = static_cast<Index>(i);
-      for (int j = 0; j < found; ++j) {
-        const Index c = nearest[j];
-        if (c == static_cast<Index>(i)) break;  // the point's own base position comes first
-        if ((base.row(c) - base.row(row)).norm() <= reach && base_normals.row(c).dot(base_normals.row(row)) >= 0.5) {
-          feet[i] = c;
-          break;
+      const Eigen::RowVector3d q = finest.row(row);
+      const double reach2 = 0.0625 * (q - base.row(row)).squaredNorm();  // a quarter of the offset, squared
+      // Walk the rings downhill towards q: on a smooth base that finds the nearest base point
+      // within reach in a few steps, with no search of the whole base.
+      Index here = static_cast<Index>(i);
+      double best = (q - base.row(row)).squaredNorm();
+      for (int step = 0; step < 16; ++step) {
+        Index next = here;
+        const Index* r = rings.data() + static_cast<std::size_t>(here) * ring;
+        for (std::size_t j = 1; j < ring; ++j) {
+          const Index c = r[j];
+          const double d = (q - base.row(c)).squaredNorm();
+          if (d < best && (base.row(c) - base.row(row)).squaredNorm() <= reach2 &&
+              base_normals.row(c).dot(base_normals.row(row)) >= 0.5) {
+            best = d;
+            next = c;
+          }
         }
+        if (next == here) break;
+        here = next;
       }
+      feet[i] = here;
     }
   }, {}, 4096);
   return feet;

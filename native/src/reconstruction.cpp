@@ -90,7 +90,7 @@ EditSupport edit_support(const MultiscaleModel& model) {
   edit.planes = ring_planes(model.base, edit.rings, edit.ring_size);
   const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
   const Points finest = reconstruct(model, ones, nullptr, false).positions;
-  edit.feet = base_feet(model.base, model.base_normals, finest);
+  edit.feet = base_feet(model.base, model.base_normals, finest, edit.rings, edit.ring_size);
   return edit;
 }
 

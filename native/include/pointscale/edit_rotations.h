@@ -19,15 +19,16 @@ IndexList base_rings(const Points& base);
 inline int ring_size_for(Eigen::Index points) { return points < base_ring_size ? static_cast<int>(points) : base_ring_size; }
 
 // Where each point's detail stands on the base: the base point nearest to the point itself
-// (its finest level), so that the detail turns with the base beneath it, not with the spot its
+// (its finest level), found by walking the rings downhill from the point's own base position, so that the detail turns with the base beneath it, not with the spot its
 // own base position happens to fall on (under tall detail the base positions of one feature
 // spread over more than the feature, and a lift curving across that spread bent it). The foot
 // is taken only within a quarter of the point's offset from its own base position, and only
 // where the base faces the same way (normals within 60 degrees): where the base curves inward
 // under tall detail the nearest base point can lie anywhere, and the point's own base position
 // is the better guess. Otherwise the point stands on its own base position.
-// base, base_normals, finest  #P by 3. Returns #P base point indices.
-IndexList base_feet(const Points& base, const Points& base_normals, const Points& finest);
+// base, base_normals, finest  #P by 3; rings from base_rings(base). Returns #P base point indices.
+IndexList base_feet(const Points& base, const Points& base_normals, const Points& finest, const IndexList& rings,
+                    int ring_size);
 
 // What edit_rotations found.
 struct EditRotationReport {

@@ -1,0 +1,150 @@
+#!/usr/bin/env python3
+"""Edits at any scale (issue 16): the figures behind the tests, printed (no assertions).
+
+    python bench/edits_bench.py [--no-scans]
+
+1. Tall handles on a lifted base: the largest angle, over the 16 handles, between a handle's
+   axis and the analytic normal of the lift at its centre, per shape, setting and lift
+   (centred on a handle and between handles; radius as a multiple of the handle spacing;
+   height 0.5 and 1.0 times the radius).
+2. Scans (Max Planck, bunny; skipped without ../shared/data): brush lifts of 5, 10 and 15% of
+   the diagonal at three places, and a 60-degree bend of one end. Per edit, over the points the
+   edit moved: the 95th percentile of the change in each detail offset's angle to the base
+   normal (independent 24-neighbour PCA of the unedited and of the edited base), the same with
+   the edited PCA taken over the unedited neighbour sets, and the largest change of an
+   offset's length.
+3. reconstruct and Reconstructor at 100k points (bumpy sphere, generator order), medians of
+   15: unedited, handed its own base back, and on a base a lift moved everywhere.
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))  # the tests' edits and measures, so both use the same ones
+
+import pointscale as ps  # noqa: E402
+from helpers import SHARED_DATA, diagonal  # noqa: E402
+from test_edits_at_any_scale import (SHAPES, bend, brush, gaussian_lift, handle_axis_angles,  # noqa: E402
+                                     lift_normal, pca_normals)
+
+
+def handles() -> None:
+    print("1. tall handles: largest angle (degrees) over the 16 handles")
+    print("| shape, decimation, levels, kernel | base height range / handle height | lift height / radius |"
+          " on, 0.75 | on, 1 | on, 1.5 | on, 2 | between, 0.75 | between, 1 | between, 1.5 | between, 2 |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for (name, decimation), (width, height, spacing, _, levels) in SHAPES.items():
+        points, handle, centres = ps.shapes.handles_plane(size=2.0, count=4, width=width, height=height,
+                                                          spacing=spacing)
+        for kernel in (1.0, 2.0):
+            dec = ps.decompose(points, levels=levels, decimation=decimation, kernel=kernel)
+            for lift_factor in (0.5, 1.0):
+                cells = []
+                for centre in (centres[9], centres[5] + 0.25):
+                    for factor in (0.75, 1.0, 1.5, 2.0):
+                        radius = 0.5 * factor
+                        lift = lift_factor * radius
+                        result = ps.reconstruct(dec, base=gaussian_lift(dec.base, centre, radius, lift))
+                        angles = handle_axis_angles(result, points, handle, centres,
+                                                    lambda c: lift_normal(c, centre, radius, lift)[0])
+                        cells.append(f"{angles.max():.2f}")
+                flat = np.ptp(dec.base[:, 2]) / height
+                print(f"| {name} ({len(points)} pts), {decimation}, {levels}, {kernel:g} | {flat:.3f} |"
+                      f" {lift_factor:g} | " + " | ".join(cells) + " |")
+
+
+def scans() -> None:
+    print("\n2. scans: p95 change of offset angle to the base normal (degrees); the same with the edited"
+          " PCA over the unedited neighbour sets; largest relative change of an offset's length")
+    print("| scan | edit | points moved | p95 | p95, same neighbour sets | length change |")
+    print("|---|---|---|---|---|---|")
+    for name in ("max_planck.ply", "bunny.ply"):
+        path = SHARED_DATA / name
+        if not path.exists():
+            print(f"| {name} | skipped: not in {SHARED_DATA} | | | | |")
+            continue
+        points = ps.io.read(path).points
+        dec = ps.decompose(points, levels=4)
+        base, diag = dec.base, diagonal(dec.base)
+        n0 = pca_normals(base, dec.normals(0))
+        before = ps.reconstruct(dec) - base
+        rings = cKDTree(base).query(base, 24)[1]
+        edits = []
+        for seed in (1, 3, 7):
+            centre = np.random.default_rng(seed).integers(len(points))
+            for frac in (0.05, 0.10, 0.15):
+                edits.append((f"brush {frac:.0%} at #{centre}", brush(base, n0, centre, frac * diag, 0.3 * frac * diag)))
+        extent = np.ptp(base, axis=0)
+        order = np.argsort(extent)
+        for sign in (1, -1):
+            along, towards = sign * np.eye(3)[order[2]], np.eye(3)[order[0]]
+            edited, _ = bend(base, along, towards, 0.1 * extent.max(), 60.0)
+            edits.append((f"bend 60 deg, {'+' if sign > 0 else '-'} end", edited))
+        for label, edited in edits:
+            after = ps.reconstruct(dec, base=edited) - edited
+            moved = np.linalg.norm(edited - base, axis=1) > 1e-9 * diag
+            l0, l1 = np.linalg.norm(before, axis=1), np.linalg.norm(after, axis=1)
+            use = moved & (l0 > 1e-9 * diag)
+            polar0 = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", before, n0) / l0, -1, 1)))
+            row = []
+            for n1 in (pca_normals(edited, n0), fixed_set_normals(edited, rings, n0)):
+                polar1 = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", after, n1) / l1, -1, 1)))
+                row.append(np.percentile(np.abs(polar1 - polar0)[use], 95))
+            length = np.abs(l1 / np.maximum(l0, 1e-300) - 1)[use].max()
+            print(f"| {name} | {label} | {use.sum()} | {row[0]:.2f} | {row[1]:.2f} | {length:.1e} |")
+
+
+def fixed_set_normals(points, rings, reference):
+    q = points[rings] - points[rings].mean(axis=1, keepdims=True)
+    n = np.linalg.eigh(np.einsum("nki,nkj->nij", q, q))[1][:, :, 0]
+    return n * np.where(np.einsum("ij,ij->i", n, reference) < 0, -1.0, 1.0)[:, None]
+
+
+def timings() -> None:
+    print("\n3. reconstruct at 100k points x 4 levels, medians of 15 (ms)")
+    dec = ps.decompose(ps.shapes.bumpy_sphere(100_000), levels=4)
+    base = dec.base
+    lifted = base.copy()
+    lifted[:, 2] += 0.2 * np.exp(-((base[:, :2] - 0.3) ** 2).sum(axis=1) / 0.3)
+    t0 = time.perf_counter()
+    solver = ps.Reconstructor(dec)
+    print(f"Reconstructor setup (finds the edit support too): {(time.perf_counter() - t0) * 1e3:.1f} ms")
+    t0 = time.perf_counter()
+    ps.reconstruct(dec, base=lifted)
+    print(f"first edited reconstruct (finds the edit support): {(time.perf_counter() - t0) * 1e3:.1f} ms")
+    for label, b in (("unedited", None), ("its own base back", base), ("a base moved everywhere", lifted)):
+        row = []
+        for f in (lambda: ps.reconstruct(dec, base=b), lambda: solver.reconstruct(base=b)):
+            f()
+            times = []
+            for _ in range(15):
+                t0 = time.perf_counter()
+                f()
+                times.append(time.perf_counter() - t0)
+            row.append(statistics.median(times) * 1e3)
+        print(f"{label:24s} reconstruct {row[0]:6.1f}   Reconstructor {row[1]:6.1f}")
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--no-scans", action="store_true")
+    args = p.parse_args()
+    import warnings
+    warnings.simplefilter("ignore", UserWarning)  # coarse-base warnings: the handles want a flat base
+    handles()
+    if not args.no_scans:
+        scans()
+    timings()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
