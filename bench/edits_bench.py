@@ -86,7 +86,8 @@ def scans() -> None:
         order = np.argsort(extent)
         for sign in (1, -1):
             along, towards = sign * np.eye(3)[order[2]], np.eye(3)[order[0]]
-            edited, _ = bend(base, along, towards, 0.1 * extent.max(), 60.0)
+            edited, theta = bend(base, along, towards, 60.0)
+            assert abs(np.degrees(theta.max()) - 60.0) < 1e-9, 'the bend must reach 60 degrees'
             edits.append((f"bend 60 deg, {'+' if sign > 0 else '-'} end", edited))
         for label, edited in edits:
             after = ps.reconstruct(dec, base=edited) - edited

@@ -170,15 +170,17 @@ def brush(base, normals, centre, radius, height):
     return base + height * weight[:, None] * normals[centre]
 
 
-def bend(base, along, towards, start, angle_degrees):
-    """A Simple-Deform-like bend of the part beyond `start` (along `along`) towards `towards`,
-    over the first half of that part, rigid beyond: returns (edited, each point's angle)."""
+def bend(base, along, towards, angle_degrees):
+    """A Simple-Deform-like bend of one end (along `along`) towards `towards`: a circular ramp
+    whose centre lies 1.5 times beyond the far side (so nothing folds over), then the rest of
+    that end turned rigidly, one fifth of the ramp long. Returns (edited, each point's angle)."""
     o = base.mean(axis=0)
-    t = (base - o) @ along - start
     s = (base - o) @ towards
     angle = np.radians(angle_degrees)
-    width = 0.5 * t.max()
-    rho = width / angle
+    rho = 1.5 * np.abs(s).max()
+    width = rho * angle
+    t = (base - o) @ along
+    t = t - (t.max() - 1.2 * width)
     theta = np.clip(t, 0, width) / rho
     rest = np.maximum(t - width, 0)
     r = rho - s
@@ -206,9 +208,10 @@ def offset_lengths_kept(dec, edited):
     return (np.abs(after / before - 1)[use]).max()
 
 
-# The offsets turn with the base: their lengths stay. Their angle to an independent 24-point
-# PCA normal of the edited base is not yet within the issue's 3 degrees everywhere on these
-# scans (issue 16 stays open on it), so it is not asserted here.
+# The offsets turn with the base: their lengths stay. Under brush lifts their angle to an
+# independent 24-point PCA normal of the edited base is not yet within the issue's 3 degrees
+# everywhere (5.8-10 degrees at some places, bench/edits_bench.py; issue 16 stays open on it),
+# so for brushes it is not asserted here.
 @pytest.mark.parametrize("seed", [1, 7])
 def test_a_brush_lift_on_a_scan_keeps_every_offset_length(scan, seed):
     name, points, dec = scan
@@ -219,11 +222,29 @@ def test_a_brush_lift_on_a_scan_keeps_every_offset_length(scan, seed):
     assert offset_lengths_kept(dec, brush(dec.base, normals, centre, radius, 0.3 * radius)) < 1e-9
 
 
-def test_a_bend_of_one_part_on_a_scan_keeps_every_offset_length(scan):
+def offset_angle_change_p95(dec, edited):
+    """95th percentile, over the points the edit moved, of the change in the angle between a
+    point's detail offset and the base normal there (independent 24-neighbour PCA normals of
+    the stored and of the edited base), in degrees."""
+    base, diag = dec.base, diagonal(dec.base)
+    before = ps.reconstruct(dec) - base
+    after = ps.reconstruct(dec, base=edited) - edited
+    n0 = pca_normals(base, dec.normals(0))
+    n1 = pca_normals(edited, n0)  # no edit here turns a normal by 90 degrees or more
+    l0, l1 = np.linalg.norm(before, axis=1), np.linalg.norm(after, axis=1)
+    use = (np.linalg.norm(edited - base, axis=1) > 1e-9 * diag) & (l0 > 1e-9 * diag)
+    angle0 = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", before, n0) / np.maximum(l0, 1e-300), -1, 1)))
+    angle1 = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", after, n1) / np.maximum(l1, 1e-300), -1, 1)))
+    return np.percentile(np.abs(angle1 - angle0)[use], 95)
+
+
+@pytest.mark.parametrize("end", [1, -1])
+def test_detail_follows_a_bend_of_one_part_on_a_scan(scan, end):
+    """Requirement 3's bend: measured 1.1-1.5 degrees at the 95th percentile (bench/edits_bench.py)."""
     name, points, dec = scan
-    extent = np.ptp(dec.base, axis=0)
-    order = np.argsort(extent)
-    along, towards = -np.eye(3)[order[2]], np.eye(3)[order[0]]
-    edited, theta = bend(dec.base, along, towards, 0.1 * extent.max(), 60.0)
+    order = np.argsort(np.ptp(dec.base, axis=0))
+    along, towards = end * np.eye(3)[order[2]], np.eye(3)[order[0]]
+    edited, theta = bend(dec.base, along, towards, 60.0)
     assert np.degrees(theta.max()) == pytest.approx(60.0)
+    assert offset_angle_change_p95(dec, edited) < 2.5, name
     assert offset_lengths_kept(dec, edited) < 1e-9
