@@ -98,7 +98,7 @@ struct FoldLimitReport {
 // the two-way ring neighbours (ring members and the points whose rings hold it) and A their
 // mean, each applied s = smoothing times: D^s keeps w on a plateau s steps wide around each
 // fold, and A^s ramps it down to 0 over s more steps, so the limiter reaches w at the fold
-// itself and falls smoothly to exactly 1 at 2s ring steps from it. Points farther than that
+// itself and falls smoothly to 1, exactly 1 beyond 2s ring steps from it. Points farther than that
 // from every fold are not written to: they keep their result bit for bit.
 //
 // edited  as for find_folds, in the result's coordinates; origin: the stored base's offset
