@@ -9,6 +9,7 @@
 
 #include "pointscale/cluster_decimation.h"
 #include "pointscale/decomposition.h"
+#include "pointscale/folds.h"
 #include "pointscale/mls_projection.h"
 #include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
@@ -193,6 +194,14 @@ MultiscaleModel model_from_arrays(const py::dict& d) {
   return m;
 }
 
+// A fold reference made for a model of n points, before folds.h reads it.
+void require_reference(const FoldReference& r, Eigen::Index n) {
+  const std::size_t un = static_cast<std::size_t>(n);
+  if (r.other_sheet.size() != un || (!r.exempt.empty() && r.exempt.size() != un) ||
+      r.rings.size() != un * static_cast<std::size_t>(r.ring_size))
+    throw std::invalid_argument("the fold reference was made for another model");
+}
+
 // A decomposition's reconstruction storage, kept between reconstruct() calls (the pointscale
 // package keeps one beside each model). A call that finds it in use works without it.
 struct ReconstructionBuffers {
@@ -287,6 +296,71 @@ PYBIND11_MODULE(_core, m) {
         return without_gil([&] { return r.reconstruct(g, base_rows, o, p.get()); });
       }, py::arg("gains"), py::arg("base") = py::none(), py::arg("progress") = py::none(),
          py::arg("origin") = py::none());
+
+  // Folds of a result over its base (folds.h). result and base come in the package's world
+  // coordinates; origin is the decomposition's (the stored base is model.base + origin).
+  py::class_<FoldReference>(m, "FoldReference", "What a model's folds are measured against (folds.h).")
+      .def_property_readonly("exempting", [](const FoldReference& r) { return !r.exempt.empty(); })
+      .def_property_readonly("rings", [](const FoldReference& r) {
+        return to_array(r.rings, {static_cast<py::ssize_t>(r.other_sheet.size()), r.ring_size});
+      });
+  m.def("fold_reference", [](const MultiscaleModel& s, py::object input) {
+    Points in;
+    const bool has_input = !input.is_none();
+    if (has_input) in = to_points(input.cast<DoubleArray>());
+    if (has_input && in.rows() != s.base.rows()) throw std::invalid_argument("input must be (n, 3)");
+    return without_gil([&] { return fold_reference(s, has_input ? &in : nullptr); });
+  }, py::arg("model"), py::arg("input") = py::none());
+
+  m.def("find_folds", [](const MultiscaleModel& s, const FoldReference& ref, const DoubleArray& result,
+                         py::object base) {
+    const Eigen::Index n = s.base.rows();
+    require_reference(ref, n);
+    if (result.ndim() != 2 || result.shape(0) != n || result.shape(1) != 3) throw std::invalid_argument("result must be (n, 3)");
+    Points edited;
+    const bool has_base = !base.is_none();
+    if (has_base) edited = to_points(base.cast<DoubleArray>());
+    if (has_base && edited.rows() != n) throw std::invalid_argument("base must be (n, 3)");
+    const Eigen::Map<const Points> r(result.data(), n, 3);
+    std::vector<std::uint8_t> kind;
+    without_gil([&] { find_folds(s, ref, has_base ? &edited : nullptr, r, kind); });
+    return to_array(kind, {static_cast<py::ssize_t>(n)});
+  }, py::arg("model"), py::arg("reference"), py::arg("result"), py::arg("base") = py::none());
+
+  // Limits the gain where the result folds, in place on `result` (a writable C-contiguous
+  // float64 (n, 3) array); returns what limit_folds reports.
+  m.def("limit_folds", [](const MultiscaleModel& s, const FoldReference& ref,
+                          py::array_t<double, py::array::c_style> result, py::object base, py::object origin,
+                          int max_rounds, int smoothing) {
+    const Eigen::Index n = s.base.rows();
+    require_reference(ref, n);
+    if (!result.writeable() || result.ndim() != 2 || result.shape(0) != n || result.shape(1) != 3)
+      throw std::invalid_argument("result must be a writable C-contiguous float64 (n, 3) array");
+    if (max_rounds < 0 || max_rounds > 1000) throw std::invalid_argument("max_rounds must be in 0..1000");
+    if (smoothing < 0 || smoothing > 64) throw std::invalid_argument("smoothing must be in 0..64");
+    Points edited;
+    const bool has_base = !base.is_none();
+    if (has_base) edited = to_points(base.cast<DoubleArray>());
+    if (has_base && edited.rows() != n) throw std::invalid_argument("base must be (n, 3)");
+    const Vec3 o = to_origin(origin);
+    Eigen::Map<Points> r(result.mutable_data(), n, 3);
+    FoldLimitOptions options;
+    options.max_rounds = max_rounds;
+    options.smoothing = smoothing;
+    FoldLimitReport rep = without_gil([&] { return limit_folds(s, ref, has_base ? &edited : nullptr, o, r, options); });
+    const py::ssize_t count = static_cast<py::ssize_t>(n);
+    py::dict d;
+    d["before"] = to_array(rep.before, {count});
+    d["after"] = to_array(rep.after, {count});
+    d["limiter"] = rep.limiter.empty() ? py::object(py::none()) : py::object(to_array(rep.limiter, {count}));
+    d["folded_before"] = rep.folded_before;
+    d["folded_after"] = rep.folded_after;
+    d["changed"] = rep.changed;
+    d["rounds"] = rep.rounds;
+    d["capped"] = rep.capped;
+    return d;
+  }, py::arg("model"), py::arg("reference"), py::arg("result"), py::arg("base") = py::none(),
+     py::arg("origin") = py::none(), py::arg("max_rounds") = 40, py::arg("smoothing") = 2);
 
   m.def("decompose", [](const DoubleArray& points, const DoubleArray& origin, py::object normals, int levels,
                         double decimation, double kernel, int neighbors, double tolerance, int max_iterations,

@@ -426,11 +426,17 @@ def _base_array(dec: Decomposition, base):
     return b
 
 
-def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None) -> np.ndarray:
+def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None, folds: str = "ignore",
+                fold_reference: str = "input"):
     """The finest level rebuilt from P^0 with each band scaled by its gain (Eq. 9-11).
 
     gains  (k,) per band or (k, n) per point (painted gains); None means all 1
     base   an edited P^0 (n, 3): the detail is carried along its new normals (Sec. 8.1)
+    folds  "ignore": the points (n, 3); "report": (points, Folds), the points unchanged and
+           which of them fold over the base; "prevent": (points, Folds) with the gain limited,
+           point by point and smoothly, where the surface would fold (pointscale.folds)
+    fold_reference  "input" (default): count only the folds that the gains or the edit add to
+           the input's own; "base": every fold over the base
     Normals of every level are recomputed from that level's current points, so with unit gains
     and the unedited base this returns the input. The decomposition keeps two (n, 3) working
     arrays from the first call on (48 bytes per point) for the calls after it.
@@ -438,8 +444,14 @@ def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None) -> 
     _check_decomposition(dec)
     g = _gains_array(dec, gains)
     b = _base_array(dec, base)
+    from .folds import _fold_mode_option, _reference_option, with_folds
+    mode = _fold_mode_option(folds)
+    _reference_option(fold_reference)
     out = dec._model.reconstruct(g, b, False, -1, as_callback(progress), dec.origin, dec._buffers)
-    return finite_result(out, "the reconstruction")
+    out = finite_result(out, "the reconstruction")
+    if mode == "ignore":
+        return out
+    return with_folds(dec, out, b, mode, fold_reference)
 
 
 class Reconstructor:

@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import decompose, io, reconstruct, shapes
+from ..folds import with_folds
+from ..multiscale import _base_array
 from .folder import DECOMPOSITION_FILE, SOURCE_FILE, level_name, read_decomposition
 from .level_files import finest_normals, level_scan, reconstruct_with_normals
 from .output_checks import check_format_holds, check_output_file, check_output_folder, read_base, writable_extension
@@ -156,6 +158,9 @@ def cmd_reconstruct(args) -> None:
         points, reference = reconstruct_with_normals(dec, gains, base, args.threads, progress.stage("reconstructing"))
         if not np.isfinite(points).all():
             raise ValueError(f"--gains {args.gains} overflow: the result has infinite coordinates")
+        folds = None
+        if args.folds != "ignore":
+            points, folds = with_folds(dec, points, _base_array(dec, base), args.folds, args.fold_reference)
         progress.stage("normals")
         normals = finest_normals(points, reference, args.threads)
         tmp = staged.temporary(out)
@@ -166,6 +171,19 @@ def cmd_reconstruct(args) -> None:
         staged.commit()
     print(f"wrote {out} ({dec.n_points} points, gains {args.gains or 'all 1'}"
           f"{', edited base ' + args.base if args.base else ''})")
+    if folds is not None:
+        print(describe_folds(folds, args.folds, args.fold_reference))
+
+
+def describe_folds(folds, mode: str, reference: str) -> str:
+    against = "over the input's own" if reference == "input" else "over the base"
+    if mode == "report":
+        return f"folds: {folds.count} points fold ({against})"
+    text = (f"folds: {folds.count_before} points folded ({against}), {folds.count} after limiting the gain at "
+            f"{int(folds.changed.sum())} points in {folds.rounds} rounds")
+    if folds.capped:
+        text += f" (stopped after the cap of {folds.rounds} rounds with folds left)"
+    return text
 
 
 def cmd_info(args) -> None:

@@ -73,6 +73,12 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
     r.add_argument("--gains", help="comma-separated gain per band, coarse to fine, e.g. 2,2,1 or -1,1,1 "
                                    "(default: all 1)")
     r.add_argument("--base", help="an edited level 0 (same vertex count and order), in any supported format")
+    r.add_argument("--folds", choices=("ignore", "report", "prevent"), default="ignore",
+                   help="report the points where the surface folds over itself, or prevent folds by limiting the "
+                        "gain smoothly where they would appear")
+    r.add_argument("--fold-reference", choices=("input", "base"), default="input",
+                   help="count only the folds the gains or the edit add to the input's own, or every fold over "
+                        "the base")
     r.add_argument("--force", action="store_true", help="overwrite the output file if it exists")
     r.add_argument("--threads", type=int, default=0, help="worker threads, 0 for all cores")
 

@@ -1,0 +1,282 @@
+#include "pointscale/folds.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+#include "pointscale/edit_rotations.h"
+#include "pointscale/parallel.h"
+#include "pointscale/spatial_order.h"
+
+namespace pointscale {
+
+namespace {
+
+// A reversal counts once its cosine is below -fold_rounding: a result and its reference built
+// in different coordinates (centred or not) differ by rounding, about 1e-13 of an edge, and
+// an edge or a plane at right angles must not flip between them.
+constexpr double fold_rounding = 1e-9;
+
+// a . b < -fold_rounding |a| |b|, without the square roots.
+inline bool reversed(const Vec3& a, const Vec3& b) {
+  const double d = a.dot(b);
+  return d < 0.0 && d * d > fold_rounding * fold_rounding * a.squaredNorm() * b.squaredNorm();
+}
+
+// Two tangents of the unit normal n with t1 x t2 = n, without a branch on its direction
+// (Duff et al. 2017, "Building an orthonormal basis, revisited").
+inline void tangents(const Vec3& n, Vec3& t1, Vec3& t2) {
+  const double sign = std::copysign(1.0, n.z());
+  const double a = -1.0 / (sign + n.z());
+  const double b = n.x() * n.y() * a;
+  t1 = Vec3(1.0 + sign * n.x() * n.x() * a, sign * b, -sign * n.x());
+  t2 = Vec3(b, sign + n.y() * n.y() * a, -n.y());
+}
+
+// The FoldKind bits of point i (folds.h has the definitions). skip: ring members left out of
+// both tests; exempt: edges left out of the crossing test, and bit 0 the plane test.
+inline std::uint8_t fold_kind(const MultiscaleModel& model, const FoldReference& ref, std::uint16_t skip, std::uint16_t exempt,
+                              const Points* edited, const Eigen::Ref<const Points>& r, Eigen::Index i) {
+  const Points& base = model.base;
+  const Index* ring = ref.rings.data() + static_cast<std::size_t>(i) * ref.ring_size;
+  Vec3 t1, t2;
+  tangents(model.base_normals.row(i).transpose(), t1, t2);
+  const Vec3 bi = base.row(i).transpose();
+  const Vec3 ri = r.row(i).transpose();
+  Vec3 mr0 = Vec3::Zero(), mr1 = Vec3::Zero(), mb0 = Vec3::Zero(), mb1 = Vec3::Zero();
+  std::uint8_t kind = fold_none;
+  for (int m = 1; m < ref.ring_size; ++m) {
+    if ((skip >> m) & 1u) continue;
+    const Eigen::Index j = ring[m];
+    const Vec3 d0 = base.row(j).transpose() - bi;
+    const Vec3 db = edited ? Vec3((edited->row(j) - edited->row(i)).transpose()) : d0;
+    const Vec3 dr = r.row(j).transpose() - ri;
+    if (reversed(dr, db) && !((exempt >> m) & 1u)) kind |= fold_crossed;
+    const double u0 = d0.dot(t1), u1 = d0.dot(t2);
+    mr0 += u0 * dr;
+    mr1 += u1 * dr;
+    mb0 += u0 * db;
+    mb1 += u1 * db;
+  }
+  const Vec3 nr = mr0.cross(mr1), nb = mb0.cross(mb1);
+  if (reversed(nr, nb) && !(exempt & 1u)) kind |= fold_turned;
+  return kind;
+}
+
+// The same, with the edges that fold as bits (bit 0 for the plane): what the input exempts.
+std::uint16_t folding_bits(const MultiscaleModel& model, const FoldReference& ref, std::uint16_t skip, const Eigen::Ref<const Points>& r,
+                           Eigen::Index i) {
+  const Index* ring = ref.rings.data() + static_cast<std::size_t>(i) * ref.ring_size;
+  std::uint16_t bits = fold_kind(model, ref, skip, 0, nullptr, r, i) & fold_turned ? 1u : 0u;
+  for (int m = 1; m < ref.ring_size; ++m) {
+    if ((skip >> m) & 1u) continue;
+    const Vec3 d0 = (model.base.row(ring[m]) - model.base.row(i)).transpose();
+    const Vec3 dr = (r.row(ring[m]) - r.row(i)).transpose();
+    if (reversed(dr, d0)) bits |= static_cast<std::uint16_t>(1u << m);
+  }
+  return bits;
+}
+
+}  // namespace
+
+FoldReference fold_reference(const MultiscaleModel& model, const Points* input) {
+  static_assert(base_ring_size <= 16, "ring bits are 16 wide");
+  const std::size_t n = static_cast<std::size_t>(model.base.rows());
+  FoldReference ref;
+  ref.rings = base_rings(model.base);
+  ref.ring_size = ring_size_for(model.base.rows());
+  ref.other_sheet.assign(n, 0);
+  if (input) ref.exempt.assign(n, 0);
+  parallel_for(n, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      const Index* ring = ref.rings.data() + i * static_cast<std::size_t>(ref.ring_size);
+      const Eigen::Index row = static_cast<Eigen::Index>(i);
+      std::uint16_t skip = 0;
+      for (int m = 1; m < ref.ring_size; ++m)
+        if (ring[m] == ring[0] || model.base_normals.row(ring[m]).dot(model.base_normals.row(row)) <= 0.0)
+          skip |= static_cast<std::uint16_t>(1u << m);
+      ref.other_sheet[i] = skip;
+      if (input) ref.exempt[i] = folding_bits(model, ref, skip, *input, row);
+    }
+  }, {}, 4096);
+  ref.order = morton_order(model.base);
+  // The rings reversed, by a counting sort over the members.
+  ref.in_offsets.assign(n + 1, 0);
+  const std::size_t width = static_cast<std::size_t>(ref.ring_size);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t m = 1; m < width; ++m) ++ref.in_offsets[static_cast<std::size_t>(ref.rings[i * width + m]) + 1];
+  for (std::size_t j = 0; j < n; ++j) ref.in_offsets[j + 1] += ref.in_offsets[j];
+  ref.in_rings.resize(static_cast<std::size_t>(ref.in_offsets[n]));
+  std::vector<Index> fill(ref.in_offsets.begin(), ref.in_offsets.end() - 1);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t m = 1; m < width; ++m)
+      ref.in_rings[static_cast<std::size_t>(fill[static_cast<std::size_t>(ref.rings[i * width + m])]++)] = static_cast<Index>(i);
+  return ref;
+}
+
+std::size_t find_folds(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
+                       Eigen::Ref<const Points> result, std::vector<std::uint8_t>& kind) {
+  const std::size_t n = static_cast<std::size_t>(model.base.rows());
+  kind.assign(n, fold_none);
+  const bool exempting = !ref.exempt.empty();
+  parallel_for(n, [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t) {
+      const std::size_t i = static_cast<std::size_t>(ref.order[t]);
+      kind[i] = fold_kind(model, ref, ref.other_sheet[i], exempting ? ref.exempt[i] : 0, edited, result,
+                          static_cast<Eigen::Index>(i));
+    }
+  }, {}, 4096);
+  return n - static_cast<std::size_t>(std::count(kind.begin(), kind.end(), std::uint8_t(fold_none)));
+}
+
+void find_folds_at(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
+                   Eigen::Ref<const Points> result, const IndexList& points, std::vector<std::uint8_t>& kind) {
+  const bool exempting = !ref.exempt.empty();
+  parallel_for(points.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t k = b; k < e; ++k) {
+      const std::size_t i = static_cast<std::size_t>(points[k]);
+      kind[i] = fold_kind(model, ref, ref.other_sheet[i], exempting ? ref.exempt[i] : 0, edited, result, points[k]);
+    }
+  }, {}, 1024);
+}
+
+FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
+                            const Vec3& origin, Eigen::Ref<Points> result, const FoldLimitOptions& options) {
+  FoldLimitReport out;
+  const std::size_t n = static_cast<std::size_t>(model.base.rows());
+  const std::size_t width = static_cast<std::size_t>(ref.ring_size);
+  out.folded_before = find_folds(model, ref, edited, result, out.before);
+  out.after = out.before;
+  out.folded_after = out.folded_before;
+  if (out.folded_before == 0) return out;
+
+  // The two-way ring neighbours of i (its ring's members, and the points whose rings hold it):
+  // a symmetric neighbourhood, so that widening and averaging spread alike in every direction.
+  auto each_neighbour = [&](Index i, auto&& visit) {
+    const Index* ring = ref.rings.data() + static_cast<std::size_t>(i) * width;
+    for (std::size_t m = 1; m < width; ++m) visit(ring[m]);
+    for (Index k = ref.in_offsets[static_cast<std::size_t>(i)]; k < ref.in_offsets[static_cast<std::size_t>(i) + 1]; ++k)
+      visit(ref.in_rings[static_cast<std::size_t>(k)]);
+  };
+  // Where the limiter pulls a point: its base, in the result's coordinates.
+  auto base_at = [&](Index i) -> Eigen::RowVector3d {
+    return edited ? Eigen::RowVector3d(edited->row(i)) : Eigen::RowVector3d(model.base.row(i) + origin.transpose());
+  };
+  std::vector<double>& lambda = out.limiter;
+  lambda.assign(n, 1.0);
+  std::vector<double> strength(n, 0.0), field(n, 0.0), scratch(n, 0.0);
+  std::vector<int> stamp(n, -1);  // the list-building step that last took each point
+  int step_id = 0;
+  IndexList seeds, active, grown, check, folds;
+  // The result as reconstructed, for the points the limiter has touched (their slot in kept).
+  std::vector<Index> slot(n, -1);
+  IndexList touched;
+  Points kept;
+  std::vector<std::uint8_t> moved(n, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    if (out.before[i] != fold_none) folds.push_back(static_cast<Index>(i));
+
+  // active, and every neighbour of it, into grown (each once).
+  auto widen = [&]() {
+    ++step_id;
+    grown.clear();
+    auto take = [&](Index j) {
+      if (stamp[static_cast<std::size_t>(j)] == step_id) return;
+      stamp[static_cast<std::size_t>(j)] = step_id;
+      grown.push_back(j);
+    };
+    for (Index i : active) {
+      take(i);
+      each_neighbour(i, take);
+    }
+  };
+  // One pass of the field over grown: the largest (widening) or the mean (averaging) of each
+  // point and its neighbours. field is zero outside active, so only grown can change.
+  auto pass = [&](bool largest) {
+    widen();
+    parallel_for(grown.size(), [&](std::size_t b, std::size_t e) {
+      for (std::size_t t = b; t < e; ++t) {
+        const Index j = grown[t];
+        double v = field[static_cast<std::size_t>(j)];
+        int count = 1;
+        each_neighbour(j, [&](Index k) {
+          const double f = field[static_cast<std::size_t>(k)];
+          v = largest ? std::max(v, f) : v + f;
+          ++count;
+        });
+        scratch[static_cast<std::size_t>(j)] = largest ? v : v / count;
+      }
+    }, {}, 512);
+    for (Index j : grown) field[static_cast<std::size_t>(j)] = scratch[static_cast<std::size_t>(j)];
+    active.swap(grown);
+  };
+
+  while (!folds.empty() && out.rounds < options.max_rounds) {
+    ++out.rounds;
+    for (Index f : folds) {
+      double& w = strength[static_cast<std::size_t>(f)];
+      if (w == 0.0) seeds.push_back(f);
+      w = 1.0 - options.step * (1.0 - w);
+    }
+    // The limiter afresh from every strength: a plateau, then a ramp (folds.h).
+    for (Index i : active) field[static_cast<std::size_t>(i)] = 0.0;
+    active = seeds;
+    for (Index s : seeds) field[static_cast<std::size_t>(s)] = strength[static_cast<std::size_t>(s)];
+    for (int k = 0; k < options.smoothing; ++k) pass(true);
+    for (int k = 0; k < options.smoothing; ++k) pass(false);
+    for (Index i : active) {
+      const std::size_t ui = static_cast<std::size_t>(i);
+      lambda[ui] = 1.0 - field[ui];
+      if (slot[ui] < 0) {
+        slot[ui] = static_cast<Index>(touched.size());
+        touched.push_back(i);
+      }
+    }
+    // The touched points from their reconstructed rows; a touched point the limiter no longer
+    // reaches gets its row back exactly.
+    if (kept.rows() < static_cast<Eigen::Index>(touched.size())) {
+      Points more(static_cast<Eigen::Index>(touched.size()), 3);
+      more.topRows(kept.rows()) = kept;
+      for (Eigen::Index t = kept.rows(); t < more.rows(); ++t) more.row(t) = result.row(touched[static_cast<std::size_t>(t)]);
+      kept.swap(more);
+    }
+    for (Index i : touched) {
+      const std::size_t ui = static_cast<std::size_t>(i);
+      if (stamp[ui] != step_id) lambda[ui] = 1.0;
+      const Eigen::RowVector3d original = kept.row(slot[ui]);
+      const Eigen::RowVector3d b = base_at(i);
+      const Eigen::RowVector3d now = lambda[ui] == 1.0 ? original : Eigen::RowVector3d(b + lambda[ui] * (original - b));
+      moved[ui] = (now.array() != result.row(i).array()).any() ? 1 : 0;
+      result.row(i) = now;
+    }
+    // Test again every point that moved or whose ring holds one that moved: no other point's
+    // folds can have changed.
+    ++step_id;
+    check.clear();
+    auto take = [&](Index j) {
+      if (stamp[static_cast<std::size_t>(j)] == step_id) return;
+      stamp[static_cast<std::size_t>(j)] = step_id;
+      check.push_back(j);
+    };
+    for (Index i : touched) {
+      const std::size_t ui = static_cast<std::size_t>(i);
+      if (!moved[ui]) continue;
+      take(i);
+      for (Index k = ref.in_offsets[ui]; k < ref.in_offsets[ui + 1]; ++k) take(ref.in_rings[static_cast<std::size_t>(k)]);
+    }
+    find_folds_at(model, ref, edited, result, check, out.after);
+    // Folds left: among the tested points, and the folds of this round that were not tested
+    // (their limiter and their rings did not move: one stronger fold beside them sets it).
+    for (Index f : folds)
+      if (stamp[static_cast<std::size_t>(f)] != step_id) check.push_back(f);
+    folds.clear();
+    for (Index i : check)
+      if (out.after[static_cast<std::size_t>(i)] != fold_none) folds.push_back(i);
+  }
+  out.folded_after = n - static_cast<std::size_t>(std::count(out.after.begin(), out.after.end(), std::uint8_t(fold_none)));
+  out.capped = out.folded_after > 0;
+  out.changed = static_cast<std::size_t>(std::count_if(lambda.begin(), lambda.end(), [](double l) { return l < 1.0; }));
+  return out;
+}
+
+}  // namespace pointscale
