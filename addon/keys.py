@@ -103,6 +103,21 @@ def ensure_mask(obj, l: int):
     return vg
 
 
+FOLDS = "Folds"
+
+
+def show_folds(obj, mask: np.ndarray) -> None:
+    """The vertex group ``Folds``: weight 1 on the points that fold, none elsewhere."""
+    # A new group each time: emptying the old one vertex by vertex took 30 ms at 100k.
+    old = obj.vertex_groups.get(FOLDS)
+    if old is not None:
+        obj.vertex_groups.remove(old)
+    vg = obj.vertex_groups.new(name=FOLDS)
+    folded = np.flatnonzero(mask).tolist()
+    if folded:
+        vg.add(folded, 1.0, "REPLACE")
+
+
 def write_layout(obj, basis: np.ndarray, levels: np.ndarray, old_k: int) -> list:
     """Level and Band keys and masks for k = len(levels). Removes the stale keys this add-on
     made, keeps the last Multiscale Edit / Filter as "... (previous)", and keeps the active key.

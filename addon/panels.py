@@ -114,6 +114,9 @@ class POINTSCALE_PT_bands(_Decomposed, bpy.types.Panel):
             op.band = item.index
         layout.operator("pointscale.reset_bands", icon="LOOP_BACK")
         layout.operator("pointscale.bake_filter", icon="SHAPEKEY_DATA")
+        row = layout.row(align=True)
+        row.prop(s, "prevent_folds")
+        row.prop(s, "show_folds")
 
 
 class POINTSCALE_PT_deform(_Decomposed, bpy.types.Panel):
@@ -125,6 +128,10 @@ class POINTSCALE_PT_deform(_Decomposed, bpy.types.Panel):
         col.operator("pointscale.edit_base", icon="EDITMODE_HLT").mode = "EDIT"
         col.operator("pointscale.edit_base", text="Sculpt Base", icon="SCULPTMODE_HLT").mode = "SCULPT"
         layout.operator("pointscale.rebuild_detail", icon="FILE_REFRESH")
+        s = context.active_object.data.multiscale
+        row = layout.row(align=True)
+        row.prop(s, "prevent_folds")
+        row.prop(s, "show_folds")
 
 
 class POINTSCALE_PT_morph(_Sub, bpy.types.Panel):

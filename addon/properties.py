@@ -120,6 +120,18 @@ class MULTISCALE_PG_settings(bpy.types.PropertyGroup):
         max=12.0,
         step=5,
     )
+    # --- folds (Rebuild Detail, Bake Filter)
+    prevent_folds: BoolProperty(
+        name="Prevent Folds",
+        description="Limit the gain locally, and smoothly, wherever the rebuilt or baked surface would fold over "
+        "itself (only points near a fold change)",
+        default=False,
+    )
+    show_folds: BoolProperty(
+        name="Show Folds",
+        description="Put the points that fold into the 'Folds' vertex group (weight 1), to see them in Weight Paint",
+        default=True,
+    )
     # --- display
     detail_band: IntProperty(name="Band", description="Band whose detail coefficients are shown", default=0, min=0)
     # --- morph

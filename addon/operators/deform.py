@@ -8,6 +8,20 @@ from .. import compute, engine, keys, mesh_io, writeback
 from ._common import DecomposedOperator
 
 
+def report_folds(op, obj, folds, done: str) -> None:
+    """Say how many points fold (and, with Show Folds, mark them in the 'Folds' vertex group)."""
+    settings = obj.data.multiscale
+    if settings.show_folds:
+        keys.show_folds(obj, folds.mask)
+    if folds.count == 0:
+        prevented = f" (gain limited at {int(folds.changed.sum())} points)" if settings.prevent_folds and folds.changed.any() else ""
+        op.report({"INFO"}, f"{done}; no point folds{prevented}")
+        return
+    where = f", marked in the '{keys.FOLDS}' vertex group" if settings.show_folds else ""
+    hint = "" if settings.prevent_folds else "; turn on Prevent Folds, or lower the gains"
+    op.report({"WARNING"}, f"{done}; {folds.count} points fold over the base{where}{hint}")
+
+
 class POINTSCALE_OT_edit_base(DecomposedOperator, bpy.types.Operator):
     """Make the 'Level 0' key active and enter Edit mode: move the smooth base with any tool,
     then press Rebuild Detail"""
@@ -56,11 +70,12 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
         try:
             dec = writeback.decomposition(mesh, ps)
             base = mesh_io.read_key(keys.get(mesh, keys.level_name(0)))
-            result = compute.rebuild(ps, dec, base)
+            result, folds = compute.rebuild(ps, dec, base, prevent_folds=mesh.multiscale.prevent_folds)
         except ValueError as exc:
             self.report({"ERROR"}, f"Rebuild detail: {exc}")
             return {"CANCELLED"}
         writeback.show_result(obj, keys.EDIT, result)
+        report_folds(self, obj, folds, "Rebuilt the detail")
         return {"FINISHED"}
 
 
@@ -89,7 +104,7 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
             base = mesh_io.read_key(keys.get(mesh, keys.level_name(0)))
             values = keys.band_values(mesh, k)
             weights = mesh_io.read_group_weights(obj, keys.band_masks(obj, k), len(mesh.vertices))
-            result = compute.bake(ps, dec, base, values, weights)
+            result, folds = compute.bake(ps, dec, base, values, weights, prevent_folds=mesh.multiscale.prevent_folds)
         except ValueError as exc:
             self.report({"ERROR"}, f"Bake filter: {exc}")
             return {"CANCELLED"}
@@ -100,7 +115,7 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
                 if kb is not None:
                     kb.value = 0.0
         gains = ", ".join(f"{1 + v:.2f}" for v in values)
-        self.report({"INFO"}, f"Baked gains ({gains}) into '{keys.FILTER}'")
+        report_folds(self, obj, folds, f"Baked gains ({gains}) into '{keys.FILTER}'")
         return {"FINISHED"}
 
 

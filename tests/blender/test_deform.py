@@ -93,3 +93,29 @@ def test_edit_mode_workflow_writes_level0_and_rebuilds():
     far = rest[basis[rest, 2] < -0.5]
     moved = np.linalg.norm(result[far] - basis[far], axis=1)
     assert np.median(moved) < 0.01 * 0.3 and moved.max() < 0.05 * 0.3  # far from the edit, little moves
+
+
+def test_bake_filter_says_how_many_points_fold_and_prevent_folds_removes_them():
+    keys = importlib.import_module(h.ADDON_NAME + ".keys")
+    mesh_io = importlib.import_module(h.ADDON_NAME + ".mesh_io")
+    import pointscale as ps
+
+    obj = h.mesh_object(ps.shapes.bumpy_sphere(6000), name="Folding")
+    h.decompose(obj, levels=4)
+    me = obj.data
+    bands = [keys.band_name(l) for l in range(me.multiscale.n_bands)]
+
+    def folded():
+        (weights,) = mesh_io.read_group_weights(obj, [keys.FOLDS], len(me.vertices))
+        return int((weights > 0).sum())
+
+    for name in bands:  # every band 5 times over: the bumps fold (54 points in the engine alone)
+        me.shape_keys.key_blocks[name].value = keys.BAND_MAX
+    me.multiscale.prevent_folds = False
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    assert folded() > 20
+    for name in bands:
+        me.shape_keys.key_blocks[name].value = keys.BAND_MAX
+    me.multiscale.prevent_folds = True
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    assert folded() == 0
