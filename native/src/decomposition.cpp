@@ -170,7 +170,7 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
   release_free_memory();
   // Unoriented: the move below does not depend on the sign, and decompose orients the
   // normals (and flips these details with them) once level 0 is known.
-  level_normals(level, support, Points(), {}, normals, nullptr, &layout);
+  level_normals(level, support, Points(), {}, normals, &layout);
   std::vector<unsigned char> is_anchor(static_cast<std::size_t>(level.rows()), 0);
   for (Index a : support.anchors) is_anchor[a] = 1;
   parallel_for(static_cast<std::size_t>(level.rows()), [&](std::size_t b, std::size_t e) {

@@ -167,6 +167,16 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
   std::vector<double> strength(n, 0.0), field(n, 0.0), scratch(n, 0.0);
   std::vector<int> stamp(n, -1);  // the list-building step that last took each point
   int step_id = 0;
+  // A new list-building step into `list`: the returned function adds a point once per step.
+  auto start_list = [&](IndexList& list) {
+    ++step_id;
+    list.clear();
+    return [&stamp, &step_id, &list](Index j) {
+      if (stamp[static_cast<std::size_t>(j)] == step_id) return;
+      stamp[static_cast<std::size_t>(j)] = step_id;
+      list.push_back(j);
+    };
+  };
   IndexList seeds, active, grown, check, folds;
   // The result as reconstructed, for the points the limiter has touched (their slot in kept).
   std::vector<Index> slot(n, -1);
@@ -178,13 +188,7 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
 
   // active, and every neighbour of it, into grown (each once).
   auto widen = [&]() {
-    ++step_id;
-    grown.clear();
-    auto take = [&](Index j) {
-      if (stamp[static_cast<std::size_t>(j)] == step_id) return;
-      stamp[static_cast<std::size_t>(j)] = step_id;
-      grown.push_back(j);
-    };
+    const auto take = start_list(grown);
     for (Index i : active) {
       take(i);
       each_neighbour(i, take);
@@ -251,13 +255,7 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
     }
     // Test again every point that moved or whose ring holds one that moved: no other point's
     // folds can have changed.
-    ++step_id;
-    check.clear();
-    auto take = [&](Index j) {
-      if (stamp[static_cast<std::size_t>(j)] == step_id) return;
-      stamp[static_cast<std::size_t>(j)] = step_id;
-      check.push_back(j);
-    };
+    const auto take = start_list(check);
     for (Index i : touched) {
       const std::size_t ui = static_cast<std::size_t>(i);
       if (!moved[ui]) continue;

@@ -57,8 +57,6 @@ inline void prefetch_line(const void* p) {
 // share (its frame). Works cluster by cluster: all members of a cluster are fitted to the
 // same neighbour clusters, gathered once.
 // point_rows: rows that fill_queries reads by query index, to prefetch; null if it reads none.
-// reference_rotation: if given, query i is oriented by its reference row turned by its
-// cluster's rotation (#C).
 // cached_groups: the queries grouped by query_labels (group_by_label, or any grouping with the same
 // groups), if the caller has them already.
 // only: if given, the clusters to work on (the others are skipped without a look), and
@@ -68,8 +66,8 @@ inline void prefetch_line(const void* p) {
 template <class FillQueries>
 void normals_at(Eigen::Index n, const Points* point_rows, const FillQueries& fill_queries, const Index* query_labels,
                 const Points& centroids, const LevelSupport& support, const Points& reference,
-                const ProgressStage& stage, Points& normals, const std::vector<Mat3>* reference_rotation = nullptr,
-                const LabelGroups* cached_groups = nullptr, const IndexList* only = nullptr) {
+                const ProgressStage& stage, Points& normals, const LabelGroups* cached_groups = nullptr,
+                const IndexList* only = nullptr) {
   const int k = support.neighbors;
   const bool has_reference = reference.rows() > 0;
   // Weights floored (plane_fit.h): the normal must be a smooth function of the anchors, since
@@ -112,9 +110,7 @@ void normals_at(Eigen::Index n, const Points* point_rows, const FillQueries& fil
           if (fit.ok) nrm = fit.normal;
         }
         if (has_reference) {
-          Vec3 r = reference.row(i).transpose();
-          if (reference_rotation) r = (*reference_rotation)[pending.cluster[l]] * r;
-          if (nrm.dot(r) < 0.0) nrm = -nrm;
+          if (nrm.dot(reference.row(i).transpose()) < 0.0) nrm = -nrm;
         }
         normals.row(i) = nrm.transpose();
       }
@@ -182,7 +178,7 @@ Points support_normals_of(const Points& query, const IndexList& clusters, const 
   std::iota(groups.offsets.begin(), groups.offsets.end(), 0);
   std::iota(groups.members.begin(), groups.members.end(), 0);
   normals_at(query.rows(), &query, relative_to_centroid(query, centroids), clusters.data(), centroids, support,
-             reference, stage, normals, nullptr, &groups, &clusters);
+             reference, stage, normals, &groups, &clusters);
   return normals;
 }
 
@@ -287,14 +283,13 @@ void frame_queries(const Points& centroids, const LevelSupport& support, Index c
 }
 
 void anchor_normals_into(const Points& centroids, const LevelSupport& support, const Points& reference,
-                         const ProgressStage& stage, Points& normals,
-                         const std::vector<Mat3>* reference_rotation = nullptr, const LabelGroups* groups = nullptr) {
+                         const ProgressStage& stage, Points& normals, const LabelGroups* groups = nullptr) {
   // The grouping is the one support.local is stored in, so row t is the query's own.
   normals_at(support.local.rows(), nullptr,
              [&](Index c, Index first, const Index*, int m, double* q) {
                frame_queries(centroids, support, c, m, [&](int t) { return first + t; }, q);
              },
-             support.labels.data(), centroids, support, reference, stage, normals, reference_rotation, groups);
+             support.labels.data(), centroids, support, reference, stage, normals, groups);
 }
 
 }  // namespace
@@ -307,12 +302,11 @@ Points level_normals(const Points& level, const LevelSupport& support, const Poi
 }
 
 void level_normals(const Points& level, const LevelSupport& support, const Points& reference,
-                   const ProgressStage& stage, Points& normals, const std::vector<Mat3>* reference_rotation,
-                   const LabelGroups* groups, Points* centroids) {
+                   const ProgressStage& stage, Points& normals, const LabelGroups* groups, Points* centroids) {
   Points own;
   Points& anchors = centroids ? *centroids : own;
   support_centroids(level, support, anchors);
-  anchor_normals_into(anchors, support, reference, stage, normals, reference_rotation, groups);
+  anchor_normals_into(anchors, support, reference, stage, normals, groups);
 }
 
 Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& support,

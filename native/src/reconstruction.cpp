@@ -53,7 +53,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
       Points& into = cache ? ws.unedited_normals[static_cast<std::size_t>(l)]
                            : previous == &ws.normals[0] ? ws.normals[1] : ws.normals[0];
       const LabelGroups* groups = static_cast<std::size_t>(l) < ws.groups.size() ? &ws.groups[l] : nullptr;
-      level_normals(fitted, s, *previous, stage, into, nullptr, groups, workspace ? &ws.centroids : nullptr);
+      level_normals(fitted, s, *previous, stage, into, groups, workspace ? &ws.centroids : nullptr);
       normals = &into;
     }
     const Points& nrm = *normals;

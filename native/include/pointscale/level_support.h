@@ -43,14 +43,12 @@ void attach_frames(const Points& centroids, const Points& positions, LevelSuppor
 Points level_normals(const Points& level, const LevelSupport& support, const Points& reference,
                      const ProgressStage& stage = {});
 
-// The same into `normals` (#P by 3), reusing its storage when it has the size already. With
-// reference_rotation (#C, from transported_rotations), point i is oriented by its reference
-// turned by its cluster's rotation. For calls over and over (Reconstructor), groups: the points
+// The same into `normals` (#P by 3), reusing its storage when it has the size already. For
+// calls over and over (Reconstructor), groups: the points
 // grouped by support.labels, the way support.local is stored (group_by_label, or the same
 // groups with the members renumbered alike), and centroids: storage for the anchors' rows.
 void level_normals(const Points& level, const LevelSupport& support, const Points& reference,
-                   const ProgressStage& stage, Points& normals,
-                   const std::vector<Mat3>* reference_rotation = nullptr, const LabelGroups* groups = nullptr,
+                   const ProgressStage& stage, Points& normals, const LabelGroups* groups = nullptr,
                    Points* centroids = nullptr);
 
 // level_normals at the members of some clusters only, from the anchors' positions alone
@@ -90,10 +88,10 @@ Points support_normals(const Points& query, const Index* query_labels, const Poi
 Points support_normals_of(const Points& query, const IndexList& clusters, const Points& centroids,
                           const LevelSupport& support, const Points& reference, const ProgressStage& stage = {});
 
-// Orientation references for an edited level 0: the rotation per cluster that best maps the
-// cluster's neighbourhood onto the edited one (Kabsch). Each stored oriented normal, turned by
-// its cluster's rotation, orients the edited level's normal, so the sign stays right even where
-// an edit turns the surface by more than 90 degrees. Unedited, the rotations are the identity.
+// The coarse turn of an edited level 0: the rotation per cluster that best maps the cluster's
+// neighbourhood onto the edited one (Kabsch). edit_rotations takes it where a ring has no
+// plane, and to tell a ring that turned past 90 degrees from one that folded over. A
+// neighbourhood the edit left as it was gives exactly the identity.
 // original, edited  #P by 3. Returns #C rotations.
 std::vector<Mat3> transported_rotations(const Points& original, const Points& edited, const LevelSupport& support);
 
