@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "pointscale/cluster_decimation.h"
+#include "pointscale/connected_parts.h"
 #include "pointscale/decomposition.h"
 #include "pointscale/folds.h"
 #include "pointscale/mls_projection.h"
@@ -115,6 +116,7 @@ py::dict model_arrays(const MultiscaleModel& m) {
     d[("local_" + s).c_str()] = local_by_point(m.support[l]);  // saved in point order
   }
   d["labels"] = labels;
+  if (!m.parts.empty()) d["parts"] = to_array(m.parts, {n});
   return d;
 }
 
@@ -191,6 +193,12 @@ MultiscaleModel model_from_arrays(const py::dict& d) {
     require(all_finite(local), "local coordinates hold NaN or infinite values at level " + s);
     local_from_points(local, sup);
   }
+  if (d.contains("parts")) {
+    auto parts = d["parts"].cast<IndexArray>();
+    if (parts.ndim() != 1 || parts.shape(0) != n) throw std::invalid_argument("parts must be (n,)");
+    m.parts.assign(parts.data(), parts.data() + n);
+    for (Index v : m.parts) if (v < 0 || v >= n) throw std::invalid_argument("part label out of range");
+  }
   return m;
 }
 
@@ -225,6 +233,10 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("details", [](const MultiscaleModel& s) { return Eigen::MatrixXd(s.details); })
       .def_property_readonly("base_normals", [](const MultiscaleModel& s) { return s.base_normals; })
       .def_property_readonly("bands", &MultiscaleModel::bands)
+      .def_property_readonly("parts", [](const MultiscaleModel& s) -> py::object {
+        if (s.parts.empty()) return py::none();
+        return to_array(s.parts, {static_cast<py::ssize_t>(s.parts.size())});
+      })
       .def_property_readonly("reports", [](const MultiscaleModel& s) {
         py::list out;
         for (const auto& r : s.reports) out.append(report_dict(r));
@@ -361,6 +373,15 @@ PYBIND11_MODULE(_core, m) {
     return d;
   }, py::arg("model"), py::arg("reference"), py::arg("result"), py::arg("base") = py::none(),
      py::arg("origin") = py::none(), py::arg("max_rounds") = 40, py::arg("smoothing") = 2);
+
+  // (labels, count) of the parts a mesh's connectivity joins; pairs (#E, 2) vertex indices.
+  m.def("connected_parts", [](const DoubleArray& points, const IndexArray& pairs) {
+    const Points p = to_points(points);
+    if (pairs.ndim() != 2 || pairs.shape(1) != 2) throw py::value_error("pairs must be (m, 2)");
+    const IndexList list(pairs.data(), pairs.data() + pairs.size());
+    const Parts parts = without_gil([&] { return connected_parts(p, list); });
+    return py::make_tuple(to_array(parts.labels, {static_cast<py::ssize_t>(parts.labels.size())}), parts.count);
+  }, py::arg("points"), py::arg("pairs"));
 
   m.def("decompose", [](const DoubleArray& points, const DoubleArray& origin, py::object normals, int levels,
                         double decimation, double kernel, int neighbors, double tolerance, int max_iterations,

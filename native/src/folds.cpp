@@ -83,7 +83,7 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input) 
   static_assert(base_ring_size <= 16, "ring bits are 16 wide");
   const std::size_t n = static_cast<std::size_t>(model.base.rows());
   FoldReference ref;
-  ref.rings = base_rings(model.base);
+  ref.rings = base_rings(model.base, model.parts);
   ref.ring_size = ring_size_for(model.base.rows());
   ref.other_sheet.assign(n, 0);
   if (input) ref.exempt.assign(n, 0);

@@ -85,7 +85,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
 
 EditSupport edit_support(const MultiscaleModel& model) {
   EditSupport edit;
-  edit.rings = base_rings(model.base);
+  edit.rings = base_rings(model.base, model.parts);
   edit.ring_size = ring_size_for(model.base.rows());
   edit.planes = ring_planes(model.base, edit.rings, edit.ring_size);
   const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);

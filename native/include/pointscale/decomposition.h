@@ -38,6 +38,9 @@ struct MultiscaleModel {
   Points base_normals;               // #P by 3, oriented normals of P^0 (orientation reference)
   std::vector<LevelSupport> support; // k, the cached neighbourhoods of levels 0..k-1
   std::vector<LevelReport> reports;  // k, level 0 first
+  // #P the connected part of each point (connected_parts.h), or empty for one part. Parts are
+  // decomposed apart (pointscale.parts), and the rings an edit is measured on stay within them.
+  IndexList parts;
   int bands() const { return static_cast<int>(details.rows()); }
 };
 

@@ -15,7 +15,9 @@ namespace pointscale {
 constexpr int base_ring_size = 13;
 
 // The rings of a base: #P by ring_size_for(#P) point indices, each row its point first.
-IndexList base_rings(const Points& base);
+// parts: #P part labels (connected_parts.h), or empty: a ring then holds points of its own part
+// only, and a part of fewer points than a ring fills the rest of its rings with the point itself.
+IndexList base_rings(const Points& base, const IndexList& parts = {});
 inline int ring_size_for(Eigen::Index points) { return points < base_ring_size ? static_cast<int>(points) : base_ring_size; }
 
 // Where each point's detail stands on the base: the base point nearest to the point itself

@@ -21,7 +21,7 @@ struct Reconstruction {
 
 // What an edited base needs: found once per model, since no edit changes it.
 struct EditSupport {
-  IndexList rings;       // #P by ring_size, base_rings(base)
+  IndexList rings;       // #P by ring_size, base_rings(base, parts)
   int ring_size = 0;
   IndexList feet;        // #P, base_feet(base, base_normals, the finest level)
   EditRingPlanes planes; // ring_planes(base, rings, ring_size)
