@@ -10,7 +10,7 @@ from .surface import decimate, estimate_normals, project
 from .folds import Folds, find_folds
 from .operators import (Morph, decompose_rayshoot, diffusion_levels, ellipsoid_base, encode, morph, project_sheets,
                         rays_missed_points, shoot_rays, smooth_diffusion)
-from . import io, shapes
+from . import io, meshes, parts, shapes
 
 __version__ = "0.1.0"
 __all__ = [

@@ -11,8 +11,8 @@ import numpy as np
 
 from . import _core
 from ._checks import (MAX_COORDINATE, MAX_EXTENT, MAX_GAIN, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS,
-                      as_callback, as_points, centre, finite_result, kernel_option, positive, require_near,
-                      require_surface, set_threads)
+                      as_callback, as_points, centre, finite_result, kernel_option, positive, require_extent,
+                      require_near, require_surface, set_threads)
 
 #: The coarsest level keeps gamma**(levels-1) * n points; fewer than this cannot carry a surface.
 MIN_COARSE_POINTS = 8
@@ -62,6 +62,17 @@ class Decomposition:
     @property
     def n_points(self) -> int:
         return self._model.base.shape[0]
+
+    @property
+    def parts(self) -> list[dict] | None:
+        """The connected parts, when decompose was given faces or edges and found more than one:
+        per part its points, first vertex, centre, size and the levels it kept. None otherwise."""
+        return self.settings.get("parts")
+
+    @property
+    def part_labels(self) -> np.ndarray | None:
+        """(n,) the part of each point, or None for one part."""
+        return self._model.parts
 
     @property
     def stats(self) -> list[dict]:
@@ -230,6 +241,8 @@ def _checked_arrays(arrays):
         label_rows.append(row)
         out[f"local_{l}"] = floats(f"local_{l}", (n, 3))
     out["labels"] = np.ascontiguousarray(np.stack(label_rows))
+    if "parts" in arrays:  # written for a decomposition of connected parts (pointscale.parts)
+        out["parts"] = indices("parts", (n,), n, "parts")
     return out, origin, settings
 
 
@@ -310,10 +323,10 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
               neighbors: int = 24, tolerance: float = 1e-7, max_iterations: int = 30,
               max_variation: float = 0.05, smoother: str = "mls", encoding: str = "projection",
               diffusion_iterations: int = 10, lam: float = 0.5, taubin: bool = True, diffusion_neighbors: int = 10,
-              threads: int = 0, progress=None) -> Decomposition:
+              threads: int = 0, progress=None, faces=None, edges=None) -> Decomposition:
     """Builds the multiscale representation P^0 + D^0 + ... + D^{k-1} of a point cloud (Sec. 7).
 
-    points      (n, 3) positions; a mesh's vertices work as they are (faces are not used)
+    points      (n, 3) positions; a mesh's vertices work as they are
     levels      point clouds P^0..P^k, so levels - 1 detail bands (levels=4 gives the 3 bands of Fig. 7)
     decimation  gamma in (0, 1): level l-1 is projected onto gamma**(k-l+1) * n cluster centroids
     kernel      kernel width as a multiple of the local spacing of those centroids
@@ -327,6 +340,11 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
                 volume-keeping variant when taubin (Sec. 5.1)
     encoding    "projection" (Sec. 6.2, exact round trip) or "rayshoot" (Sec. 6.1, see
                 decompose_rayshoot: the finest level resamples the input surface)
+    faces, edges  optional mesh connectivity: faces (m, k) or a list of polygons, edges (m, 2).
+                Each connected part is then decomposed alone (pointscale.parts), so parts that
+                lie close together neither blend nor move with each other's edits; a part too
+                small for `levels` keeps the levels it supports, with a warning that names it.
+                dec.parts lists the parts. A vertex in no face or edge joins its nearest part.
     Supported input: coordinates within +-1e150, spanning 1e-50 to 1e50 about their centre
     (_checks.py says why); levels up to 64, kernel 0.001..1000, max_iterations up to 1000,
     diffusion_iterations up to 10000 and below what Taubin's lam|mu pair keeps stable. Anything
@@ -336,6 +354,16 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
         raise ValueError(f"smoother must be 'mls' or 'diffusion', got {smoother!r}")
     if encoding not in ("projection", "rayshoot"):
         raise ValueError(f"encoding must be 'projection' or 'rayshoot', got {encoding!r}")
+    if faces is not None or edges is not None:
+        from .parts import connected_parts
+        p = as_points(points)
+        labels, count = connected_parts(p, faces, edges)
+        if count > 1:
+            options = dict(decimation=decimation, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
+                           max_iterations=max_iterations, max_variation=max_variation, smoother=smoother,
+                           encoding=encoding, diffusion_iterations=diffusion_iterations, lam=lam, taubin=taubin,
+                           diffusion_neighbors=diffusion_neighbors, threads=threads)
+            return _decompose_by_part(p, labels, count, levels, normals, options, as_callback(progress))
     from . import operators  # imports this module: import it late
     if encoding == "rayshoot":
         return operators.decompose_rayshoot(
@@ -385,6 +413,49 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     if diffusion is not None:
         _require_round_trip(dec, p, f"diffusion_iterations={diffusion[3]} smoothed the support too far; "
                                     "use fewer iterations")
+    return dec
+
+
+def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> Decomposition:
+    """decompose() of each connected part alone, joined into one Decomposition (pointscale.parts)."""
+    from .parts import decompose_parts, levels_kept, parts_warning
+    levels = positive(levels, "levels", integer=True, maximum=MAX_LEVELS)
+    if levels < 2:
+        raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
+    decimation = _decimation_option(options["decimation"])
+    neighbors = positive(options["neighbors"], "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
+    need = _points_needed(levels, decimation, "decompose")
+    sizes = np.bincount(labels, minlength=count)
+    if levels_kept(sizes, levels, decimation, neighbors, MIN_COARSE_POINTS).max() < 2:
+        raise ValueError(f"every connected part is too small to decompose: the largest has {sizes.max()} points, and "
+                         f"levels=2 needs at least {_points_needed(2, decimation, 'decompose')} "
+                         f"(levels={levels} needs {need}). Decompose without faces and edges to treat the parts "
+                         "as one surface")
+    require_extent(p)
+    n_arr = None
+    if normals is not None:
+        n_arr = as_points(normals, "normals")
+        if n_arr.shape != p.shape:
+            raise ValueError(f"normals must have the shape of points {p.shape}, got {n_arr.shape}")
+    origin = centre(p)
+
+    def decompose_one(points, part_normals, part_levels, part_progress):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the parts' warnings are summed up below
+            return decompose(points, part_levels, normals=part_normals, progress=part_progress, **options)
+
+    arrays, stats, reports = decompose_parts(p, n_arr, labels, count, levels, decimation, neighbors,
+                                             MIN_COARSE_POINTS, decompose_one, progress, origin)
+    model = _core.Model.from_arrays(arrays)
+    dec_settings = dict(levels=levels, decimation=decimation, kernel=options["kernel"], neighbors=neighbors,
+                        tolerance=options["tolerance"], max_iterations=options["max_iterations"],
+                        max_variation=options["max_variation"], smoother=options["smoother"],
+                        encoding=options["encoding"], parts=reports)
+    dec = Decomposition(model, origin, dec_settings, _stats=stats)
+    _require_finite_model(dec)
+    for message in (coarse_base_warning(int(sizes.max()), levels, decimation), parts_warning(reports, levels)):
+        if message:
+            warnings.warn(message, stacklevel=3)
     return dec
 
 

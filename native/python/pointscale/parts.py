@@ -1,0 +1,323 @@
+"""Connected parts: a mesh's faces or edges keep its parts apart.
+
+Eyes, teeth, hair cards and clothing layers are separate parts of one mesh. A point-based fit
+blends parts that lie closer than its kernel, so with connectivity `decompose` decomposes each
+part alone and joins the results into one Decomposition: no part's points weigh in another's
+fits, clusters or normals, and an edit of one part's base leaves the others as they were.
+
+A part too small for the levels asked keeps the levels its own resolution supports: its
+coarser levels repeat its smoothest one (its bands there are zero), and a warning names it.
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from . import _core
+
+#: A part other than the largest keeps a level only if it has this many support points there.
+#: Measured on boxes, the worst case for a coarse level (tests/test_parts.py holds the bound):
+#: a box's level 0 strays from the input by about 1.6 / sqrt(support points) of its diagonal,
+#: 7% with 384 points, 12% with 216; 320 keeps it near 9%.
+PART_COARSE_POINTS = 320
+_TOO_FEW = "too few points for the coarser levels"
+#: How many parts a warning names before it says "and N more".
+_NAMED_IN_WARNING = 5
+
+
+def connectivity_pairs(n: int, faces=None, edges=None) -> np.ndarray | None:
+    """The vertex pairs that faces and edges join, (m, 2) int32, or None when neither is given.
+
+    faces  (f, k) integer array (k >= 2), or a list of index sequences of any lengths (polygons)
+    edges  (e, 2) integer array
+    Every index must be a vertex of the n points.
+    """
+    pieces = []
+    if faces is not None:
+        pieces.append(_face_pairs(faces))
+    if edges is not None:
+        e = _integers(edges, "edges")
+        if e.ndim != 2 or e.shape[1] != 2:
+            raise ValueError(f"edges must have shape (m, 2), got {e.shape}")
+        pieces.append(e)
+    if not pieces:
+        return None
+    pairs = np.concatenate(pieces) if len(pieces) > 1 else pieces[0]
+    if pairs.size and (pairs.min() < 0 or pairs.max() >= n):
+        what = "faces and edges" if len(pieces) > 1 else ("faces" if faces is not None else "edges")
+        raise ValueError(f"{what} must hold vertex indices in [0, {n - 1}], got [{pairs.min()}, {pairs.max()}]")
+    return np.ascontiguousarray(pairs, dtype=np.int32)
+
+
+def connected_parts(points, faces=None, edges=None) -> tuple[np.ndarray, int]:
+    """The parts that faces or edges connect: (labels (n,) int32, count).
+
+    Parts are numbered in the order of their lowest vertex in a face or edge. A vertex in no
+    face or edge (a scan's untriangulated point) joins the part of its nearest vertex that is
+    in one; with no faces and no edges everything is one part.
+    """
+    from ._checks import as_points
+    p = as_points(points)
+    pairs = connectivity_pairs(len(p), faces, edges)
+    if pairs is None:
+        return np.zeros(len(p), dtype=np.int32), 1
+    labels, count = _core.connected_parts(p, pairs)
+    return labels, int(count)
+
+
+def _integers(a, what: str) -> np.ndarray:
+    try:
+        arr = np.asarray(a)
+    except Exception:
+        raise ValueError(f"{what} must be an array of vertex indices") from None
+    if arr.size == 0:
+        return np.zeros((0, 2), dtype=np.int64)
+    if arr.dtype.kind not in "iu":
+        raise ValueError(f"{what} must hold integer vertex indices, got dtype {arr.dtype}")
+    return arr.astype(np.int64, copy=False)
+
+
+def _face_pairs(faces) -> np.ndarray:
+    """Each face's first corner paired with each of its others: enough to join its corners."""
+    if isinstance(faces, np.ndarray) and faces.dtype != object:
+        f = _integers(faces, "faces")
+        if f.size == 0:
+            return np.zeros((0, 2), dtype=np.int64)
+        if f.ndim != 2 or f.shape[1] < 2:
+            raise ValueError(f"faces must have shape (m, k) with k >= 2 corners, or be a list of polygons, "
+                             f"got {f.shape}")
+        first = np.repeat(f[:, :1], f.shape[1] - 1, axis=1)
+        return np.stack([first.ravel(), f[:, 1:].ravel()], axis=1)
+    try:
+        polygons = [np.asarray(face) for face in faces]
+    except TypeError:
+        raise ValueError("faces must be an (m, k) array or a list of index sequences") from None
+    if not polygons:
+        return np.zeros((0, 2), dtype=np.int64)
+    if any(poly.ndim != 1 for poly in polygons):
+        raise ValueError("each face must be a flat sequence of vertex indices")
+    flat = _integers(np.concatenate(polygons), "faces")
+    lengths = np.array([len(poly) for poly in polygons])
+    starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
+    first = np.repeat(flat[starts[lengths > 0]], lengths[lengths > 0])
+    return np.stack([first, flat], axis=1)
+
+
+def levels_kept(sizes: np.ndarray, levels: int, decimation: float, neighbors: int, minimum: int) -> np.ndarray:
+    """Per part, how many of the levels asked its own resolution supports (1: the part itself
+    only, with no bands). The largest part (and any as large) keeps them all, as a single
+    surface would; any other needs PART_COARSE_POINTS support points at its coarsest level."""
+    kept = np.ones(len(sizes), dtype=np.int64)
+    for count in range(2, levels + 1):
+        coarse = np.floor(decimation ** (count - 1) * sizes.astype(np.float64))
+        kept[coarse >= max(minimum, neighbors, PART_COARSE_POINTS)] = count
+    largest = sizes == sizes.max()
+    if np.floor(decimation ** (levels - 1) * float(sizes.max())) >= max(minimum, neighbors):
+        kept[largest] = levels
+    return kept
+
+
+def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, levels: int, decimation: float,
+                    neighbors: int, minimum: int, decompose_one, progress, origin: np.ndarray):
+    """Decomposes each part alone and joins them: (model arrays, stats, part reports).
+
+    decompose_one(points, normals, levels, progress) -> Decomposition decomposes one part.
+    """
+    from ._checks import require_surface
+
+    def spans_surface(points):
+        try:
+            require_surface(points)
+        except ValueError:
+            return False
+        return True
+    order = np.argsort(labels, kind="stable")
+    sizes = np.bincount(labels, minlength=count)
+    bounds = np.concatenate([[0], np.cumsum(sizes)])
+    kept = levels_kept(sizes, levels, decimation, neighbors, minimum)
+    n, k = len(p), levels - 1
+    total = float(n)
+    done = 0
+    parts = []
+    for part in range(count):
+        idx = order[bounds[part]:bounds[part + 1]]  # ascending: argsort is stable
+        points = p[idx]
+        reason = None
+        if kept[part] >= 2 and not spans_surface(points):
+            reason = "it spans no surface (its points are on a line or a plane)"
+            kept[part] = 1
+        dec = None
+        if kept[part] >= 2:
+            sub = None
+            if progress is not None:
+                start, weight = done / total, len(idx) / total
+                sub = (lambda f, s=start, w=weight: progress(s + w * f))
+            try:
+                dec = decompose_one(points, None if normals is None else normals[idx], int(kept[part]), sub)
+            except ValueError as exc:
+                raise ValueError(f"part {part} ({len(idx)} points, first vertex {idx[0]}): {exc}") from None
+        parts.append((idx, dec, reason))
+        done += len(idx)
+        if progress is not None and progress(done / total) is False:
+            raise _core.Cancelled("cancelled")
+    arrays = _joined(p, normals, parts, k, neighbors, origin)
+    arrays["parts"] = np.ascontiguousarray(labels, dtype=np.int32)
+    reports = [_part_report(part, idx, dec, reason, levels, p) for part, (idx, dec, reason) in enumerate(parts)]
+    stats = _joined_stats(parts, k, sizes)
+    return arrays, stats, reports
+
+
+def _joined(p, normals, parts, k, neighbors, origin) -> dict:
+    """One model's arrays from the parts' (see to_dict): each part's clusters follow the
+    previous part's, and a part with fewer bands takes its smoothest level's support for the
+    coarser levels, where its bands are zero."""
+    n = len(p)
+    base = np.empty((n, 3))
+    details = np.zeros((k, n))
+    base_normals = np.empty((n, 3))
+    labels = np.empty((k, n), dtype=np.int32)
+    local = [np.zeros((n, 3)) for _ in range(k)]
+    per_level = [dict(neighborhoods=[], kernel=[], anchors=[], frames=[]) for _ in range(k)]
+    offsets = [0] * k
+    # Frozen parts' kernel widths only shape normals that displace nothing: the largest
+    # decomposed part's median width at each level serves.
+    decomposed = [dec for _, dec, _ in parts if dec is not None]
+    if decomposed:
+        main = max(decomposed, key=lambda d: d.n_points)
+        kernel_scale = [float(main.stats[max(l - (k - main.n_bands), 0)]["kernel_width"]) for l in range(k)]
+    else:
+        kernel_scale = [1e-3 * float(np.ptp(p, axis=0).max())] * k
+    for idx, dec, _ in parts:
+        if dec is None:
+            _frozen_part(p, normals, idx, k, neighbors, kernel_scale, origin, base, base_normals, labels, per_level,
+                         offsets)
+            continue
+        a = dec._model.to_arrays()
+        kp = dec.n_bands
+        shift = k - kp
+        base[idx] = a["base"] + (dec.origin - origin)
+        base_normals[idx] = a["base_normals"]
+        details[shift:, idx] = a["details"]
+        for l in range(k):
+            own = max(l - shift, 0)
+            c = len(a[f"kernel_{own}"])
+            if a[f"neighborhoods_{own}"].shape[1] != neighbors:
+                raise ValueError(f"a part has {a[f'neighborhoods_{own}'].shape[1]} neighbours per cluster, "
+                                 f"not {neighbors}")  # levels_kept should never allow it
+            labels[l, idx] = a["labels"][own] + offsets[l]
+            local[l][idx] = a[f"local_{own}"]
+            per_level[l]["neighborhoods"].append(a[f"neighborhoods_{own}"] + offsets[l])
+            per_level[l]["kernel"].append(a[f"kernel_{own}"])
+            per_level[l]["anchors"].append(idx[a[f"anchors_{own}"]])
+            per_level[l]["frames"].append(a[f"frames_{own}"] + offsets[l])
+            offsets[l] += c
+    out = dict(base=base, details=details, base_normals=base_normals, labels=labels)
+    for l in range(k):
+        out[f"neighborhoods_{l}"] = np.ascontiguousarray(np.concatenate(per_level[l]["neighborhoods"]), np.int32)
+        out[f"kernel_{l}"] = np.concatenate(per_level[l]["kernel"])
+        out[f"anchors_{l}"] = np.ascontiguousarray(np.concatenate(per_level[l]["anchors"]), np.int32)
+        out[f"frames_{l}"] = np.ascontiguousarray(np.concatenate(per_level[l]["frames"]), np.int32)
+        out[f"local_{l}"] = local[l]
+    return out
+
+
+def _frozen_part(p, normals, idx, k, neighbors, kernel_scale, origin, base, base_normals, labels, per_level,
+                 offsets) -> None:
+    """A part with no bands: every level is the part itself. Each point is its own cluster,
+    with its nearest points of the part as neighbours, so that its normals are fitted on the
+    part alone; they only orient it, since nothing is displaced along them."""
+    points = p[idx]
+    m = len(idx)
+    base[idx] = points - origin
+    base_normals[idx] = _part_normals(points, None if normals is None else normals[idx])
+    near = min(neighbors, m)
+    rows, _ = _core.self_knn(np.ascontiguousarray(points), near)
+    rows = rows.astype(np.int64)
+    own = np.arange(m)
+    # The point itself first, as the core keeps each cluster (knn_graph does the same).
+    first = rows[:, 0] != own
+    for i in np.flatnonzero(first):
+        j = np.flatnonzero(rows[i] == i)
+        rows[i, j[0] if len(j) else 0] = rows[i, 0]
+        rows[i, 0] = i
+    if near < neighbors:
+        rows = np.concatenate([rows, np.repeat(own[:, None], neighbors - near, axis=1)], axis=1)
+    for l in range(k):
+        labels[l, idx] = offsets[l] + own
+        per_level[l]["neighborhoods"].append(rows + offsets[l])
+        per_level[l]["kernel"].append(np.full(m, kernel_scale[l]))
+        per_level[l]["anchors"].append(idx)
+        per_level[l]["frames"].append(np.repeat((offsets[l] + own)[:, None], 2, axis=1))
+        offsets[l] += m
+
+
+def _part_normals(points: np.ndarray, normals) -> np.ndarray:
+    """Unit normals for a part with no bands: the given ones where usable, else the part's
+    least-spread direction, pointing away from the part's centre where it has one."""
+    m = len(points)
+    out = np.empty((m, 3))
+    centre = points.mean(axis=0)
+    spread = points - centre
+    _, _, vt = np.linalg.svd(spread, full_matrices=False) if m >= 2 else (None, None, np.eye(3))
+    axis = vt[-1] if vt.shape[0] == 3 else np.array([0.0, 0.0, 1.0])
+    out[:] = axis
+    flip = spread @ axis < 0
+    out[flip] = -axis
+    if normals is not None:
+        length = np.linalg.norm(normals, axis=1)
+        good = length > 0
+        out[good] = normals[good] / length[good, None]
+    return out
+
+
+def _part_report(part: int, idx: np.ndarray, dec, reason, levels: int, p: np.ndarray) -> dict:
+    kept = dec.n_levels if dec is not None else 1
+    lo, hi = p[idx].min(axis=0), p[idx].max(axis=0)
+    return dict(part=part, points=int(len(idx)), first_vertex=int(idx[0]), levels=int(kept),
+                centre=[float(v) for v in 0.5 * (lo + hi)], size=float(np.linalg.norm(hi - lo)),
+                why=reason or ("" if kept == levels else _TOO_FEW))
+
+
+def _joined_stats(parts, k: int, sizes) -> list[dict]:
+    """The model's per-level report: counts summed over the parts, the kernel width of the
+    largest part, the worst consistency figures."""
+    largest = int(np.argmax(sizes))
+    stats = []
+    for l in range(k):
+        row = dict(support_points=0, kernel_width=0.0, not_converged=0, degenerate=0, consistency_iterations=0,
+                   consistency_residual=0.0, pinned=0)
+        for part, (idx, dec, _) in enumerate(parts):
+            if dec is None:
+                row["support_points"] += len(idx)
+                continue
+            own = max(l - (k - dec.n_bands), 0)
+            s = dec.stats[own]
+            for key in ("support_points", "not_converged", "degenerate", "pinned"):
+                row[key] += int(s[key])
+            row["consistency_iterations"] = max(row["consistency_iterations"], int(s["consistency_iterations"]))
+            row["consistency_residual"] = max(row["consistency_residual"], float(s["consistency_residual"]))
+            if part == largest:
+                row["kernel_width"] = float(s["kernel_width"])
+        stats.append(row)
+    return stats
+
+
+def parts_warning(reports: list[dict], levels: int) -> str | None:
+    """The warning that names the parts keeping fewer levels than asked, or None."""
+    short = [r for r in reports if r["levels"] < levels]
+    if not short:
+        return None
+    short.sort(key=lambda r: -r["points"])
+    named = "; ".join(_described(r) for r in short[:_NAMED_IN_WARNING])
+    more = len(short) - _NAMED_IN_WARNING
+    tail = f"; and {more} smaller part{'s' if more > 1 else ''}" if more > 0 else ""
+    return (f"{len(short)} of {len(reports)} connected parts are too small for levels={levels}: {named}{tail}. "
+            "Their coarser levels repeat their smoothest one, so their bands there are zero.")
+
+
+def _described(r: dict) -> str:
+    c = ", ".join(f"{v:.4g}" for v in r["centre"])
+    kept = f"keeps {r['levels']} levels" if r["levels"] > 1 else "keeps no bands"
+    why = f" ({r['why']})" if r["why"] and r["why"] != _TOO_FEW else ""
+    return f"part {r['part']} ({r['points']} points from vertex {r['first_vertex']}, around ({c})) {kept}{why}"
