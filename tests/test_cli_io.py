@@ -81,7 +81,12 @@ def test_every_attribute_survives_into_every_level_and_result(tmp_path):
     points = ellipsoid_with_bumps(6000, axes=(0.7, 1.0, 1.6), seed=8)
     faces = np.random.default_rng(1).integers(0, len(points), (500, 3))
     attrs = plyfile_scan(tmp_path / "in.ply", points, faces, dtype="f4")
-    done = run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3")
+    # Random faces join random vertices into parts too small to decompose, which is refused
+    # with a message that says what to do; they are here to carry attributes.
+    refused = run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3")
+    assert "every connected part is too small" in one_line_error(refused) and "--parts none" in refused.stderr
+    done = run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3",
+               "--parts", "none")
     assert done.returncode == 0, done.stderr
     dec = ps.load(tmp_path / "out" / "decomposition.npz")
     done = run("reconstruct", str(tmp_path / "out"), "--gains", "1,2", "-o", str(tmp_path / "boost.ply"))
@@ -386,7 +391,8 @@ def test_a_mesh_written_to_a_point_format_says_its_faces_are_dropped(tmp_path):
     points = ellipsoid_with_bumps(6000)
     faces = np.random.default_rng(6).integers(0, len(points), (300, 3))
     write_ply(tmp_path / "in.ply", points, faces=faces)
-    done = run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3", "--format", "xyz")
+    done = run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"), "--levels", "3", "--format", "xyz",
+               "--parts", "none")  # its random faces only test that they are dropped
     assert done.returncode == 0, done.stderr
     warnings = [l for l in done.stderr.splitlines() if "warning" in l]
     assert len(warnings) == 1 and "300 faces" in warnings[0] and ".part" not in warnings[0], done.stderr
@@ -412,3 +418,27 @@ def test_numbers_too_large_for_their_type_are_refused_not_wrapped(tmp_path, name
     (tmp_path / name).write_text(text)
     msg = one_line_error(run("decompose", str(tmp_path / name), "-o", str(tmp_path / "out")))
     assert name in msg
+
+
+def test_a_mesh_of_two_parts_is_decomposed_part_by_part(tmp_path):
+    """The command line passes the PLY's faces: a torus-like ring of bumps and a box beside it stay apart."""
+    sv, sf = ps.meshes.uv_sphere(0.9, 80, 40)
+    sv = ps.meshes.bumpy(sv, 0.02, 7) * np.array([1.2, 1.0, 0.8])
+    bv, bf = ps.meshes.box((0.2, 0.35, 0.25), 30)
+    bv = bv + np.array([1.08 + 0.03 + 0.1, 0.0, 0.0])
+    points, faces, part = ps.meshes.joined((sv, sf), (bv, ps.meshes.quads_to_triangles(bf)))
+    plyfile_scan(tmp_path / "two.ply", points, faces)
+    for mode, expect in (("faces", 2), ("none", None)):
+        out = tmp_path / mode
+        done = run("decompose", str(tmp_path / "two.ply"), "-o", str(out), "--parts", mode)
+        assert done.returncode == 0, done.stderr
+        dec = ps.load(out / "decomposition.npz")
+        if expect is None:
+            assert dec.parts is None
+            continue
+        assert len(dec.parts) == expect and np.array_equal(dec.part_labels, part)
+        assert "2 connected parts" in done.stdout
+        assert "part 1 (" in done.stderr  # the box keeps fewer levels, and the warning says so
+        level0 = read_ply(out / "level_0.ply").points
+        box_diag = diagonal(bv)
+        assert np.linalg.norm(level0[part == 1] - bv, axis=1).max() < 0.10 * box_diag

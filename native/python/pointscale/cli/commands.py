@@ -35,6 +35,10 @@ def describe(dec, source=None) -> str:
         rms = float(np.sqrt(np.mean(dec.details[l] ** 2)))
         lines.append(f"  band {l}: support {s['support_points']} points, kernel width {s['kernel_width']:.4g}, "
                      f"detail rms {rms:.4g}, not converged {s['not_converged']}, pinned {s['pinned']}")
+    if dec.parts:
+        short = sum(1 for part in dec.parts if part["levels"] < dec.n_levels)
+        lines.append(f"  {len(dec.parts)} connected parts, decomposed apart"
+                     + (f"; {short} keep fewer levels (see the warning)" if short else ""))
     if source is not None:
         lines.append("source: " + describe_source(source))
     return "\n".join(lines)
@@ -108,10 +112,13 @@ def cmd_decompose(args) -> None:
         try:
             dec = decompose(scan.points, levels=args.levels, decimation=args.decimation, kernel=args.kernel,
                             neighbors=args.neighbors, normals=scan.normals, smoother=args.smoother,
-                            encoding=args.encoding, threads=args.threads, progress=progress.stage("decomposing"))
+                            encoding=args.encoding, threads=args.threads, progress=progress.stage("decomposing"),
+                            faces=scan.faces if args.parts == "faces" and scan.n_faces else None)
         except ValueError as exc:
             if str(exc).startswith(("points", "normals", "all points")):  # about the file's data: name it
                 raise ValueError(f"{args.input}: {exc}") from None
+            if str(exc).startswith("every connected part"):
+                raise ValueError(f"{args.input}: {exc}; on the command line, --parts none") from None
             raise
         elapsed = time.perf_counter() - start
         progress.stage("levels")

@@ -59,6 +59,9 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
                    help="low-pass filter of each level: MLS projection (Sec. 7) or diffusion (Sec. 5.1)")
     d.add_argument("--encoding", choices=("projection", "rayshoot"), default="projection",
                    help="detail encoding: projection (exact round trip) or ray shooting (Sec. 6.1)")
+    d.add_argument("--parts", choices=("faces", "none"), default="faces",
+                   help="faces: a mesh's connected parts (by its faces) are decomposed apart, so close parts "
+                        "neither blend nor move together; none: every point is one surface")
     d.add_argument("--format", help="extension of the level files, e.g. .ply or .las (default: the input's)")
     d.add_argument("--force", action="store_true",
                    help="replace an earlier decomposition in the output folder (its level files are removed)")
