@@ -70,13 +70,17 @@ def decompose(ps, points: np.ndarray, progress=None, smoother="MLS", encoding="P
     fn, extra = decompose_function(ps, smoother, encoding)
     # The engine's warning as data: catching warnings is not thread-safe, and this runs on a
     # worker thread while the UI (and other jobs) go on.
-    check = getattr(ps, "coarse_base_warning", None)
-    message = check(len(points), kwargs.get("levels", 4), kwargs.get("decimation", 0.25)) if check else None
+    levels_asked, decimation = kwargs.get("levels", 4), kwargs.get("decimation", 0.25)
     dec = fn(np.asarray(points, dtype=np.float64), progress=progress, **kwargs, **extra)
+    parts = dec.parts or []
+    largest = max((part["points"] for part in parts), default=len(points))
+    messages = [ps.coarse_base_warning(largest, levels_asked, decimation)]
+    if parts:
+        messages.append(ps.parts.parts_warning(parts, levels_asked))
     k = dec.n_bands
     levels = np.stack([dec.level(l) for l in range(k)])
     normals = np.stack([dec.normals(l) for l in range(k)])
-    return Layout(dec, levels, normals, (message,) if message else ())
+    return Layout(dec, levels, normals, tuple(m for m in messages if m))
 
 
 def edited_base(dec, base: np.ndarray) -> np.ndarray | None:

@@ -26,6 +26,13 @@ def write_vertices(mesh, co: np.ndarray) -> None:
     mesh.update()
 
 
+def read_edges(mesh) -> np.ndarray:
+    """(e, 2) vertex indices of the mesh's edges: they say which vertices form one part."""
+    e = np.empty(2 * len(mesh.edges), dtype=np.int32)
+    mesh.edges.foreach_get("vertices", e)
+    return e.reshape(-1, 2)
+
+
 def read_key(kb) -> np.ndarray:
     seq = _key_seq(kb)
     n = len(seq)

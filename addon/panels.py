@@ -71,6 +71,7 @@ class POINTSCALE_PT_decompose(_Sub, bpy.types.Panel):
         col.prop(s, "smoother")
         col.prop(s, "encoding")
         col.prop(s, "neighbors")
+        col.prop(s, "keep_parts")
         row = layout.row()
         row.scale_y = 1.4
         row.operator("pointscale.decompose", icon="MOD_SMOOTH")

@@ -104,6 +104,12 @@ class MULTISCALE_PG_settings(bpy.types.PropertyGroup):
         ],
         default="PROJECTION",
     )
+    keep_parts: BoolProperty(
+        name="Keep Parts Apart",
+        description="Decompose each connected part of the mesh (eyes, teeth, clothing layers) alone, so that "
+        "close parts do not blend and an edit of one part's base leaves the others as they are",
+        default=True,
+    )
     # --- state written by Decompose
     n_vertices: IntProperty(name="Vertices", description="Vertex count at decompose time", default=0)
     n_bands: IntProperty(name="Bands", default=0)

@@ -39,6 +39,8 @@ def _prepare(op, context):
         problem = compute.logic.check_points(points) or keys.layout_problem(mesh, s.levels - 1, s.n_bands)
         if problem:
             raise ValueError(problem)
+        if s.keep_parts and len(mesh.edges):
+            kwargs["edges"] = mesh_io.read_edges(mesh)
     except ValueError as exc:
         op.report({"ERROR"}, f"Decompose '{obj.name}': {exc}")
         return None
