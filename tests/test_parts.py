@@ -279,3 +279,12 @@ def test_progress_and_cancel_over_parts():
     assert all(b >= a - 1e-12 for a, b in zip(seen, seen[1:]))
     with pytest.raises(ps.Cancelled):
         ps.decompose(v, 4, faces=f, progress=lambda fraction: fraction < 0.5)
+
+
+def test_parts_that_are_all_flat_are_a_clear_error():
+    a_v, a_f = meshes.grid(1.0, 1.0, 60, 60)
+    b_v, b_f = meshes.grid(0.5, 0.5, 50, 50)
+    b_v = b_v + np.array([0.0, 0.0, 0.3])
+    v, f, _ = meshes.joined((a_v, meshes.quads_to_triangles(a_f)), (b_v, meshes.quads_to_triangles(b_f)))
+    with pytest.raises(ValueError, match="spans a surface"):
+        ps.decompose(v, 3, faces=f)

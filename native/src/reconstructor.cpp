@@ -32,10 +32,6 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) {
       model_.details.col(row) = model.details.col(i);
     }
   }, {}, 4096);
-  if (!model.parts.empty()) {
-    model_.parts.resize(model.parts.size());
-    for (std::size_t r = 0; r < order_.size(); ++r) model_.parts[r] = model.parts[static_cast<std::size_t>(order_[r])];
-  }
 
   // What an edit needs, found in the model's own numbering (so that rings with neighbours at
   // equal distances list them as reconstruct() does), then renumbered.

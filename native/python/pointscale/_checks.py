@@ -60,6 +60,16 @@ def as_points(points, name: str = "points", min_count: int = 1) -> np.ndarray:
     return a
 
 
+def as_normals_of(normals, points: np.ndarray, name: str = "normals"):
+    """Optional per-point normals: None, or a checked (n, 3) array of the shape of points."""
+    if normals is None:
+        return None
+    n = as_points(normals, name)
+    if n.shape != points.shape:
+        raise ValueError(f"{name} must have the shape of points {points.shape}, got {n.shape}")
+    return n
+
+
 def column_reduce(points: np.ndarray, reduce) -> np.ndarray:
     """reduce (np.min, np.max, np.mean) of each column of an (n, 3) array: column by column,
     since NumPy's axis-0 reductions over three columns are about fifteen times slower."""

@@ -11,8 +11,8 @@ import numpy as np
 
 from . import _core
 from ._checks import (MAX_COORDINATE, MAX_EXTENT, MAX_GAIN, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS,
-                      as_callback, as_points, centre, finite_result, kernel_option, positive, require_extent,
-                      require_near, require_surface, set_threads)
+                      as_callback, as_normals_of, as_points, centre, finite_result, kernel_option, positive,
+                      require_extent, require_near, require_surface, set_threads)
 
 #: The coarsest level keeps gamma**(levels-1) * n points; fewer than this cannot carry a surface.
 MIN_COARSE_POINTS = 8
@@ -393,11 +393,7 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     message = coarse_base_warning(len(p), levels, decimation)
     if message:
         warnings.warn(message, stacklevel=2)
-    n_arr = None
-    if normals is not None:
-        n_arr = as_points(normals, "normals")
-        if n_arr.shape != p.shape:
-            raise ValueError(f"normals must have the shape of points {p.shape}, got {n_arr.shape}")
+    n_arr = as_normals_of(normals, p)
     progress = as_callback(progress)
     origin = centre(p)
     settings = dict(levels=levels, decimation=decimation, kernel=kernel, neighbors=neighbors,
@@ -432,11 +428,7 @@ def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> 
                          f"(levels={levels} needs {need}). Decompose without faces and edges to treat the parts "
                          "as one surface")
     require_extent(p)
-    n_arr = None
-    if normals is not None:
-        n_arr = as_points(normals, "normals")
-        if n_arr.shape != p.shape:
-            raise ValueError(f"normals must have the shape of points {p.shape}, got {n_arr.shape}")
+    n_arr = as_normals_of(normals, p)
     origin = centre(p)
 
     def decompose_one(points, part_normals, part_levels, part_progress):

@@ -10,7 +10,7 @@ import numpy as np
 
 from . import _core
 from ._checks import (MAX_DIFFUSION_ITERATIONS, MAX_GAIN, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS, as_callback,
-                      as_points, centre, finite_result, kernel_option, positive, require_extent, require_near,
+                      as_normals_of, as_points, centre, finite_result, kernel_option, positive, require_extent, require_near,
                       require_stable_diffusion, require_surface, set_threads)
 from .multiscale import MIN_COARSE_POINTS, Decomposition, _decimation_option, _points_needed, _require_finite_model
 
@@ -338,11 +338,7 @@ def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decima
         raise ValueError(f"decompose_rayshoot needs at least {need} points for levels={levels} and "
                          f"decimation={decimation}; got {len(p)}")
     require_surface(p)
-    n_arr = None
-    if normals is not None:
-        n_arr = as_points(normals, "normals")
-        if n_arr.shape != p.shape:
-            raise ValueError(f"normals must have the shape of points {p.shape}, got {n_arr.shape}")
+    n_arr = as_normals_of(normals, p)
     limit = 0.0 if max_distance is None else positive(max_distance, "max_distance")
     fine_kernel = kernel_option(fine_kernel, "fine_kernel")
     origin = centre(p)
