@@ -383,6 +383,17 @@ PYBIND11_MODULE(_core, m) {
     return py::make_tuple(to_array(parts.labels, {static_cast<py::ssize_t>(parts.labels.size())}), parts.count);
   }, py::arg("points"), py::arg("pairs"));
 
+  // Every point's k nearest of its own part (itself first), #P by k; parts (#P,) labels.
+  m.def("knn_within_parts", [](const DoubleArray& points, const IndexArray& parts, int k) {
+    const Points p = to_points(points);
+    if (parts.ndim() != 1 || parts.shape(0) != p.rows()) throw py::value_error("parts must be (n,)");
+    if (k < 1) throw py::value_error("k must be at least 1");
+    const IndexList labels(parts.data(), parts.data() + parts.size());
+    for (Index v : labels) if (v < 0 || v >= p.rows()) throw py::value_error("part label out of range");
+    const IndexList rows = without_gil([&] { return knn_within_parts(p, labels, k); });
+    return to_array(rows, {static_cast<py::ssize_t>(p.rows()), k});
+  }, py::arg("points"), py::arg("parts"), py::arg("k"));
+
   m.def("decompose", [](const DoubleArray& points, const DoubleArray& origin, py::object normals, int levels,
                         double decimation, double kernel, int neighbors, double tolerance, int max_iterations,
                         double max_variation, py::object diffusion, py::object progress) {

@@ -1,5 +1,6 @@
 #include "pointscale/connected_parts.h"
 
+#include <algorithm>
 #include <numeric>
 #include <stdexcept>
 
@@ -64,6 +65,29 @@ Parts connected_parts(const Points& points, const IndexList& pairs) {
       out.labels[i] = out.labels[static_cast<std::size_t>(members[static_cast<std::size_t>(nearest)])];
     }
   }, {}, 1024);
+  return out;
+}
+
+IndexList knn_within_parts(const Points& points, const IndexList& parts, int k) {
+  const std::size_t width = static_cast<std::size_t>(k);
+  IndexList out(static_cast<std::size_t>(points.rows()) * width);
+  if (parts.empty()) return out;
+  const Index count = *std::max_element(parts.begin(), parts.end()) + 1;
+  std::vector<IndexList> members(static_cast<std::size_t>(count));
+  for (std::size_t i = 0; i < parts.size(); ++i) members[static_cast<std::size_t>(parts[i])].push_back(static_cast<Index>(i));
+  for (const IndexList& part : members) {
+    if (part.empty()) continue;
+    Points own(static_cast<Eigen::Index>(part.size()), 3);
+    for (std::size_t j = 0; j < part.size(); ++j) own.row(static_cast<Eigen::Index>(j)) = points.row(part[j]);
+    const int found = std::min<int>(k, static_cast<int>(part.size()));
+    const IndexList local = knn_graph(SpatialIndex(own), found);
+    for (std::size_t j = 0; j < part.size(); ++j) {
+      Index* row = out.data() + static_cast<std::size_t>(part[j]) * width;
+      for (std::size_t m = 0; m < width; ++m)
+        row[m] = m < static_cast<std::size_t>(found) ? part[static_cast<std::size_t>(local[j * static_cast<std::size_t>(found) + m])]
+                                                     : part[j];
+    }
+  }
   return out;
 }
 

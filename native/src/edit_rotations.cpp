@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 
+#include "pointscale/connected_parts.h"
 #include "pointscale/parallel.h"
 #include "pointscale/plane_fit.h"
 #include "pointscale/spatial_index.h"
@@ -14,25 +15,7 @@ namespace pointscale {
 
 IndexList base_rings(const Points& base, const IndexList& parts) {
   const int width = ring_size_for(base.rows());
-  if (parts.empty()) return knn_graph(SpatialIndex(base), width);
-  const std::size_t ring = static_cast<std::size_t>(width);
-  IndexList rings(static_cast<std::size_t>(base.rows()) * ring);
-  const Index count = *std::max_element(parts.begin(), parts.end()) + 1;
-  std::vector<IndexList> members(static_cast<std::size_t>(count));
-  for (std::size_t i = 0; i < parts.size(); ++i) members[static_cast<std::size_t>(parts[i])].push_back(static_cast<Index>(i));
-  for (const IndexList& part : members) {
-    if (part.empty()) continue;
-    Points own(static_cast<Eigen::Index>(part.size()), 3);
-    for (std::size_t j = 0; j < part.size(); ++j) own.row(static_cast<Eigen::Index>(j)) = base.row(part[j]);
-    const int k = std::min<int>(width, static_cast<int>(part.size()));
-    const IndexList local = knn_graph(SpatialIndex(own), k);
-    for (std::size_t j = 0; j < part.size(); ++j) {
-      Index* row = rings.data() + static_cast<std::size_t>(part[j]) * ring;
-      for (std::size_t m = 0; m < ring; ++m)
-        row[m] = m < static_cast<std::size_t>(k) ? part[static_cast<std::size_t>(local[j * static_cast<std::size_t>(k) + m])] : part[j];
-    }
-  }
-  return rings;
+  return parts.empty() ? knn_graph(SpatialIndex(base), width) : knn_within_parts(base, parts, width);
 }
 
 IndexList base_feet(const Points& base, const Points& base_normals, const Points& finest, const IndexList& rings,

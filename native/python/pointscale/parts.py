@@ -124,14 +124,6 @@ def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, leve
 
     decompose_one(points, normals, levels, progress) -> Decomposition decomposes one part.
     """
-    from ._checks import require_surface
-
-    def spans_surface(points):
-        try:
-            require_surface(points)
-        except ValueError:
-            return False
-        return True
     order = np.argsort(labels, kind="stable")
     sizes = np.bincount(labels, minlength=count)
     bounds = np.concatenate([[0], np.cumsum(sizes)])
@@ -144,7 +136,7 @@ def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, leve
         idx = order[bounds[part]:bounds[part + 1]]  # ascending: argsort is stable
         points = p[idx]
         reason = None
-        if kept[part] >= 2 and not spans_surface(points):
+        if kept[part] >= 2 and not _spans_surface(points):
             reason = "it spans no surface (its points are on a line or a plane)"
             kept[part] = 1
         dec = None
@@ -161,11 +153,23 @@ def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, leve
         done += len(idx)
         if progress is not None and progress(done / total) is False:
             raise _core.Cancelled("cancelled")
+    if all(dec is None for _, dec, _ in parts):
+        raise ValueError("no connected part large enough to decompose spans a surface (each is flat or on a line): "
+                         "there is no detail to separate from a base")
     arrays = _joined(p, normals, parts, k, neighbors, origin)
     arrays["parts"] = np.ascontiguousarray(labels, dtype=np.int32)
     reports = [_part_report(part, idx, dec, reason, levels, p) for part, (idx, dec, reason) in enumerate(parts)]
     stats = _joined_stats(parts, k, sizes)
     return arrays, stats, reports
+
+
+def _spans_surface(points: np.ndarray) -> bool:
+    from ._checks import require_surface
+    try:
+        require_surface(points)
+    except ValueError:
+        return False
+    return True
 
 
 def _joined(p, normals, parts, k, neighbors, origin) -> dict:
@@ -182,16 +186,10 @@ def _joined(p, normals, parts, k, neighbors, origin) -> dict:
     offsets = [0] * k
     # Frozen parts' kernel widths only shape normals that displace nothing: the largest
     # decomposed part's median width at each level serves.
-    decomposed = [dec for _, dec, _ in parts if dec is not None]
-    if decomposed:
-        main = max(decomposed, key=lambda d: d.n_points)
-        kernel_scale = [float(main.stats[max(l - (k - main.n_bands), 0)]["kernel_width"]) for l in range(k)]
-    else:
-        kernel_scale = [1e-3 * float(np.ptp(p, axis=0).max())] * k
+    main = max((dec for _, dec, _ in parts if dec is not None), key=lambda d: d.n_points)
+    kernel_scale = [float(main.stats[max(l - (k - main.n_bands), 0)]["kernel_width"]) for l in range(k)]
     for idx, dec, _ in parts:
         if dec is None:
-            _frozen_part(p, normals, idx, k, neighbors, kernel_scale, origin, base, base_normals, labels, per_level,
-                         offsets)
             continue
         a = dec._model.to_arrays()
         kp = dec.n_bands
@@ -212,6 +210,10 @@ def _joined(p, normals, parts, k, neighbors, origin) -> dict:
             per_level[l]["anchors"].append(idx[a[f"anchors_{own}"]])
             per_level[l]["frames"].append(a[f"frames_{own}"] + offsets[l])
             offsets[l] += c
+    frozen = [idx for idx, dec, _ in parts if dec is None]
+    if frozen:
+        _frozen_parts(p, normals, frozen, k, neighbors, kernel_scale, origin, base, base_normals, labels, per_level,
+                      offsets)
     out = dict(base=base, details=details, base_normals=base_normals, labels=labels)
     for l in range(k):
         out[f"neighborhoods_{l}"] = np.ascontiguousarray(np.concatenate(per_level[l]["neighborhoods"]), np.int32)
@@ -222,27 +224,20 @@ def _joined(p, normals, parts, k, neighbors, origin) -> dict:
     return out
 
 
-def _frozen_part(p, normals, idx, k, neighbors, kernel_scale, origin, base, base_normals, labels, per_level,
-                 offsets) -> None:
-    """A part with no bands: every level is the part itself. Each point is its own cluster,
-    with its nearest points of the part as neighbours, so that its normals are fitted on the
-    part alone; they only orient it, since nothing is displaced along them."""
-    points = p[idx]
+def _frozen_parts(p, normals, frozen, k, neighbors, kernel_scale, origin, base, base_normals, labels, per_level,
+                  offsets) -> None:
+    """The parts with no bands, all at once: every level is the part itself. Each point is its
+    own cluster, with its nearest points of its part as neighbours, so that its normals are
+    fitted on the part alone; they only orient it, since nothing is displaced along them.
+    frozen: each such part's point indices. Their clusters follow all the others'."""
+    idx = np.concatenate(frozen)
+    part = np.repeat(np.arange(len(frozen)), [len(f) for f in frozen]).astype(np.int32)
+    points = np.ascontiguousarray(p[idx])
     m = len(idx)
     base[idx] = points - origin
-    base_normals[idx] = _part_normals(points, None if normals is None else normals[idx])
-    near = min(neighbors, m)
-    rows, _ = _core.self_knn(np.ascontiguousarray(points), near)
-    rows = rows.astype(np.int64)
+    base_normals[idx] = _part_normals(points, part, len(frozen), None if normals is None else normals[idx])
+    rows = _core.knn_within_parts(points, part, neighbors).astype(np.int64)
     own = np.arange(m)
-    # The point itself first, as the core keeps each cluster (knn_graph does the same).
-    first = rows[:, 0] != own
-    for i in np.flatnonzero(first):
-        j = np.flatnonzero(rows[i] == i)
-        rows[i, j[0] if len(j) else 0] = rows[i, 0]
-        rows[i, 0] = i
-    if near < neighbors:
-        rows = np.concatenate([rows, np.repeat(own[:, None], neighbors - near, axis=1)], axis=1)
     for l in range(k):
         labels[l, idx] = offsets[l] + own
         per_level[l]["neighborhoods"].append(rows + offsets[l])
@@ -252,18 +247,19 @@ def _frozen_part(p, normals, idx, k, neighbors, kernel_scale, origin, base, base
         offsets[l] += m
 
 
-def _part_normals(points: np.ndarray, normals) -> np.ndarray:
-    """Unit normals for a part with no bands: the given ones where usable, else the part's
-    least-spread direction, pointing away from the part's centre where it has one."""
-    m = len(points)
-    out = np.empty((m, 3))
-    centre = points.mean(axis=0)
-    spread = points - centre
-    _, _, vt = np.linalg.svd(spread, full_matrices=False) if m >= 2 else (None, None, np.eye(3))
-    axis = vt[-1] if vt.shape[0] == 3 else np.array([0.0, 0.0, 1.0])
-    out[:] = axis
-    flip = spread @ axis < 0
-    out[flip] = -axis
+def _part_normals(points: np.ndarray, part: np.ndarray, count: int, normals) -> np.ndarray:
+    """Unit normals for parts with no bands: the given ones where usable, else each part's
+    least-spread direction, pointing away from its centre. part: (m,) the part of each point."""
+    size = np.bincount(part, minlength=count).astype(np.float64)
+    centre = np.stack([np.bincount(part, points[:, a], count) for a in range(3)], axis=1) / size[:, None]
+    spread = points - centre[part]
+    cov = np.zeros((count, 3, 3))
+    for a in range(3):
+        for b in range(a, 3):
+            cov[:, a, b] = cov[:, b, a] = np.bincount(part, spread[:, a] * spread[:, b], count)
+    axis = np.linalg.eigh(cov)[1][:, :, 0]  # the eigenvector of the smallest spread, per part
+    out = axis[part]
+    out[(spread * out).sum(axis=1) < 0] *= -1.0
     if normals is not None:
         length = np.linalg.norm(normals, axis=1)
         good = length > 0
