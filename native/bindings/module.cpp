@@ -396,7 +396,7 @@ PYBIND11_MODULE(_core, m) {
 
   m.def("decompose", [](const DoubleArray& points, const DoubleArray& origin, py::object normals, int levels,
                         double decimation, double kernel, int neighbors, double tolerance, int max_iterations,
-                        double max_variation, py::object diffusion, py::object progress) {
+                        double max_variation, py::object diffusion, py::object progress, bool thin_sheets) {
     Points p = to_points_centred(points, to_origin(origin));
     Points n;
     const bool has_normals = !normals.is_none();
@@ -409,6 +409,7 @@ PYBIND11_MODULE(_core, m) {
     o.mls.neighbors = neighbors;
     o.mls.tolerance = tolerance;
     o.mls.max_iterations = max_iterations;
+    o.thin_sheets = thin_sheets && has_normals;  // the Python layer orients normals when none are given
     DiffusionOptions dif;  // (neighbors, lambda, mu, iterations) from operators._diffusion_options
     if (!diffusion.is_none()) {
       auto t = diffusion.cast<py::tuple>();
@@ -420,7 +421,9 @@ PYBIND11_MODULE(_core, m) {
     }
     PythonProgress pp(progress);
     return without_gil([&] { return decompose(std::move(p), has_normals ? &n : nullptr, o, pp.get()); });
-  });
+  }, py::arg("points"), py::arg("origin"), py::arg("normals"), py::arg("levels"), py::arg("decimation"),
+     py::arg("kernel"), py::arg("neighbors"), py::arg("tolerance"), py::arg("max_iterations"),
+     py::arg("max_variation"), py::arg("diffusion"), py::arg("progress"), py::arg("thin_sheets") = false);
 
   m.def("project", [](const DoubleArray& points, const DoubleArray& onto, double kernel, int neighbors,
                       double tolerance, int max_iterations, py::object progress, py::object near) {

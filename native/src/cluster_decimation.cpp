@@ -19,6 +19,10 @@ struct Cluster {
   double priority;
   bool splittable;
   Cluster* child[2] = {nullptr, nullptr};  // filled once split
+  // Thin sheets: the cluster holds both sides of a wall (its points' normals disagree), so it is
+  // split by the side its points face, along side_axis, before anything else.
+  bool by_side = false;
+  Vec3 side_axis = Vec3::Zero();
 };
 
 // The input's coordinates and indices, reordered as clusters split, so that every pass over a
@@ -27,6 +31,7 @@ struct Cluster {
 struct Working {
   std::vector<double> xyz;  // 3 per point
   std::vector<Index> index;
+  std::vector<double> nrm;  // 3 per point: oriented normals, when sheets are kept apart; else empty
 };
 
 // First and second moments about a reference point, the second as its six distinct entries.
@@ -40,6 +45,35 @@ struct Moments {
     ss[3] += dy * dy; ss[4] += dy * dz; ss[5] += dz * dz;
   }
 };
+
+// The sum of a cluster's normals and of their outer products (about 0).
+Moments normal_moments(const Working& w, std::size_t begin, std::size_t end) {
+  Moments m;
+  for (std::size_t i = begin; i < end; ++i) m.add(&w.nrm[3 * i], Vec3::Zero());
+  return m;
+}
+
+// Below this length of its mean normal a cluster's points face different ways: the two sides of
+// a thin wall average to about 0, while a one-sided patch keeps about 0.64 even when it turns
+// through 180 degrees (a wall's rim) and 0.5 over a whole hemisphere.
+constexpr double one_sided_agreement = 0.6;
+
+// A cluster whose normals disagree is split by the side they face: along the main axis of their
+// outer products, the direction the two sides of a wall face, at first priority, since its
+// centroid lies between the sides, off both.
+void describe_sides(Cluster& c, double count, const Moments& normals) {
+  const Vec3 mean(normals.s[0] / count, normals.s[1] / count, normals.s[2] / count);
+  if (count < 2 || !(mean.norm() < one_sided_agreement)) return;
+  Mat3 ss;
+  ss << normals.ss[0], normals.ss[1], normals.ss[2], normals.ss[1], normals.ss[3], normals.ss[4], normals.ss[2],
+      normals.ss[4], normals.ss[5];
+  Eigen::SelfAdjointEigenSolver<Mat3> eig;
+  eig.computeDirect(ss / count);
+  c.by_side = true;
+  c.side_axis = eig.eigenvectors().col(2);
+  c.splittable = true;
+  c.priority = count * 1e6;
+}
 
 // Fills in a cluster from the first and second moments of its points about `ref`.
 void describe(Cluster& c, const Vec3& ref, double count, const Moments& sums, double max_variation) {
@@ -65,28 +99,53 @@ Cluster whole(const Working& w, double max_variation) {
   Moments sums;
   for (std::size_t i = 0; i < n; ++i) sums.add(&w.xyz[3 * i], ref);
   describe(c, ref, static_cast<double>(n), sums, max_variation);
+  if (!w.nrm.empty()) describe_sides(c, static_cast<double>(n), normal_moments(w, 0, n));
   return c;
 }
 
-// Splits c through its centroid along its axis, in place and without a branch (which side a
-// point falls on is a coin toss, and mispredicting it cost most of the time): each point is
-// swapped with the first point not known to be below, which then advances past it if it is
-// below. Then both halves are summed about c's centroid. Returns false, and marks c
-// unsplittable, when every point falls on one side.
+// Splits c through its centroid along its axis (or by side, see describe_sides), in place and
+// without a branch (which side a point falls on is a coin toss, and mispredicting it cost most
+// of the time): each point is swapped with the first point not known to be below, which then
+// advances past it if it is below. Then both halves are summed about c's centroid. Returns
+// false, and marks c unsplittable, when every point falls on one side.
 bool split(Cluster& c, Working& w, std::deque<Cluster>& store, double max_variation) {
   const Vec3 o = c.centroid;
   const Vec3 axis = c.axis;
   double* x = w.xyz.data();
   Index* idx = w.index.data();
+  const bool sheets = !w.nrm.empty();
+  double* nr = w.nrm.data();
   std::size_t lo = c.begin;  // [begin, lo) below, [lo, i) not below
-  for (std::size_t i = c.begin; i < c.end; ++i) {
-    const double px = x[3 * i], py = x[3 * i + 1], pz = x[3 * i + 2];
-    const Index pi = idx[i];
-    x[3 * i] = x[3 * lo]; x[3 * i + 1] = x[3 * lo + 1]; x[3 * i + 2] = x[3 * lo + 2];
-    idx[i] = idx[lo];
-    x[3 * lo] = px; x[3 * lo + 1] = py; x[3 * lo + 2] = pz;
-    idx[lo] = pi;
-    lo += (px - o.x()) * axis.x() + (py - o.y()) * axis.y() + (pz - o.z()) * axis.z() < 0.0;
+  if (c.by_side) {
+    const Vec3 u = c.side_axis;
+    for (std::size_t i = c.begin; i < c.end; ++i) {
+      const bool below = nr[3 * i] * u.x() + nr[3 * i + 1] * u.y() + nr[3 * i + 2] * u.z() < 0.0;
+      if (below) {
+        for (int a = 0; a < 3; ++a) { std::swap(x[3 * i + a], x[3 * lo + a]); std::swap(nr[3 * i + a], nr[3 * lo + a]); }
+        std::swap(idx[i], idx[lo]);
+        ++lo;
+      }
+    }
+    if (lo == c.begin || lo == c.end) {
+      // Its normals disagree but none faces away from the axis: split it through space instead.
+      c.by_side = false;
+      return split(c, w, store, max_variation);
+    }
+  } else {
+    for (std::size_t i = c.begin; i < c.end; ++i) {
+      const double px = x[3 * i], py = x[3 * i + 1], pz = x[3 * i + 2];
+      const Index pi = idx[i];
+      x[3 * i] = x[3 * lo]; x[3 * i + 1] = x[3 * lo + 1]; x[3 * i + 2] = x[3 * lo + 2];
+      idx[i] = idx[lo];
+      x[3 * lo] = px; x[3 * lo + 1] = py; x[3 * lo + 2] = pz;
+      idx[lo] = pi;
+      if (sheets) {
+        const double nx = nr[3 * i], ny = nr[3 * i + 1], nz = nr[3 * i + 2];
+        nr[3 * i] = nr[3 * lo]; nr[3 * i + 1] = nr[3 * lo + 1]; nr[3 * i + 2] = nr[3 * lo + 2];
+        nr[3 * lo] = nx; nr[3 * lo + 1] = ny; nr[3 * lo + 2] = nz;
+      }
+      lo += (px - o.x()) * axis.x() + (py - o.y()) * axis.y() + (pz - o.z()) * axis.z() < 0.0;
+    }
   }
   if (lo == c.begin || lo == c.end) { c.splittable = false; return false; }
   Moments below_sums, above_sums;
@@ -96,6 +155,10 @@ bool split(Cluster& c, Working& w, std::deque<Cluster>& store, double max_variat
   Cluster* b = &store.emplace_back(Cluster{lo, c.end, Vec3::Zero(), Vec3::Zero(), 0.0, false});
   describe(*a, o, static_cast<double>(lo - c.begin), below_sums, max_variation);
   describe(*b, o, static_cast<double>(c.end - lo), above_sums, max_variation);
+  if (sheets) {
+    describe_sides(*a, static_cast<double>(lo - c.begin), normal_moments(w, c.begin, lo));
+    describe_sides(*b, static_cast<double>(c.end - lo), normal_moments(w, lo, c.end));
+  }
   c.child[0] = a;
   c.child[1] = b;
   return true;
@@ -155,7 +218,7 @@ class BestFirst {
 }  // namespace
 
 Clustering cluster_decimate(const Points& points, std::size_t target, double max_variation,
-                            const IndexList* read_order) {
+                            const IndexList* read_order, const Points* side_normals) {
   const std::size_t n = static_cast<std::size_t>(points.rows());
   target = std::max<std::size_t>(1, std::min(target, n));
   if (n == 0) return Clustering{};
@@ -173,6 +236,11 @@ Clustering cluster_decimate(const Points& points, std::size_t target, double max
   } else {
     w.xyz.assign(points.data(), points.data() + 3 * n);
     for (std::size_t i = 0; i < n; ++i) w.index[i] = static_cast<Index>(i);
+  }
+  if (side_normals && side_normals->rows() == points.rows()) {
+    w.nrm.resize(3 * n);
+    for (std::size_t j = 0; j < n; ++j)
+      for (int a = 0; a < 3; ++a) w.nrm[3 * j + a] = (*side_normals)(w.index[j], a);
   }
 
   // The split of a cluster depends on its points alone, so the large ones, which nearly all

@@ -15,6 +15,7 @@
 #include "pointscale/spatial_index.h"
 #include "pointscale/spatial_order.h"
 #include "pointscale/support_neighbours.h"
+#include "pointscale/thin_sheets.h"
 
 namespace pointscale {
 
@@ -216,6 +217,11 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   // query sharing, the anchors' ties) still visit the points in the input's order, so the model,
   // numbered back at the end, is bit for bit what the input's numbering gives.
   IndexList original;
+  // Thin sheets: each point's oriented input normal tells the side of a wall it is on, at every
+  // level (smoothing moves a point along its surface, never through the wall), in the points'
+  // current numbering.
+  const bool sheets = options.thin_sheets && input_normals && input_normals->rows() == n;
+  Points sides;
 
   for (int step = 0; step < k; ++step) {
     const int l = k - step;  // builds level l-1 from level l
@@ -226,7 +232,9 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     const auto target = static_cast<std::size_t>(std::floor(std::pow(options.decimation, step + 1) * n));
     IndexList input_order;  // the points' current numbers in the input's order
     if (!original.empty()) input_order = inverse_order(original);
-    Clustering clusters = cluster_decimate(fine, target, options.max_variation, original.empty() ? nullptr : &input_order);
+    const Points* side_normals = !sheets ? nullptr : original.empty() ? input_normals : &sides;
+    Clustering clusters = cluster_decimate(fine, target, options.max_variation, original.empty() ? nullptr : &input_order,
+                                           side_normals);
     const auto cluster_count = static_cast<Index>(clusters.centroids.rows());
     // Project P^l onto the MLS surface of Q^{l-1}, cluster by cluster, each cluster's points
     // around one query at its centroid (clusters come in a spatial order), in input order.
@@ -235,8 +243,11 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     input_order = IndexList();
     if (step == 0) {
       original = number_by_groups(fine, clusters.labels, groups);
+      if (sheets) sides = gather_rows(*input_normals, original);
       release_free_memory();  // the input's copy in its own numbering
     }
+    // The points are in the first clusters' numbering by now, and so are the sides.
+    const Points cluster_sides = sheets ? cluster_side_normals(sides, clusters.labels, cluster_count) : Points();
     if (options.diffusion) clusters.centroids = diffuse(clusters.centroids, *options.diffusion);
     stage.report(0.05);
     SpatialIndex q_index(clusters.centroids);
@@ -251,6 +262,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
       mls.order = &groups.members;
       mls.near_support = &clusters.labels;
       mls.near_rows = &rows;
+      if (sheets) { mls.point_sides = &sides; mls.support_sides = &cluster_sides; }
       projected = mls_project(fine, q_index, h, mls, stage.sub(0.1, 0.8));
     }
     rows = SupportNeighbours();
@@ -266,7 +278,8 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
     for (Index c = 0; c < support.clusters; ++c) anchor_reference.row(c) = projected.normals.row(support.anchors[c]);
     projected.normals = Points();  // before the frames' local coordinates take as much
     const Points centroids = support_centroids(projected.positions, support);
-    support.neighborhoods = knn_graph(SpatialIndex(centroids), support.neighbors);
+    support.neighborhoods = sheets ? same_side_knn_graph(SpatialIndex(centroids), cluster_sides, support.neighbors)
+                                   : knn_graph(SpatialIndex(centroids), support.neighbors);
     // The same grouping (each cluster's points in input order) lays out the frames' coordinates:
     // in the input's numbering that is the layout of level_support.h.
     attach_frames(centroids, projected.positions, support, &groups);

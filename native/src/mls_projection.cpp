@@ -9,6 +9,7 @@
 #include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
 #include "pointscale/spatial_order.h"
+#include "pointscale/thin_sheets.h"
 
 namespace pointscale {
 
@@ -26,6 +27,8 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
     sheet_normals = &estimated;
   }
   const double sheet_extra = sheet_normals ? 1.0 / (options.sheet * options.sheet) - 1.0 : 0.0;
+  const bool sides = options.point_sides && options.support_sides && options.point_sides->rows() == n &&
+                     options.support_sides->rows() == support.size();
   MlsResult out;
   out.positions.resize(n, 3);
   out.normals.resize(n, 3);
@@ -44,7 +47,8 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   const IndexList* near = options.near_support && options.near_support->size() == static_cast<std::size_t>(n)
                               ? options.near_support : nullptr;
   // Centred on a support point, a query must reach past the k nearest of every point around it.
-  const int kc = std::min<int>(near ? k + near_query_extra : k + 8, support.size());
+  // With sides, about half the candidates face the other way: ask for twice as many.
+  const int kc = std::min<int>(sides ? 2 * k + near_query_extra : near ? k + near_query_extra : k + 8, support.size());
   const SupportNeighbours* rows = near && options.near_rows && options.near_rows->width == kc &&
                                           options.near_rows->reach.size() == support.size()
                                       ? options.near_rows : nullptr;
@@ -81,13 +85,18 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
     // the query's centre, so the points a query serves share one gathering; with them it is
     // each point, which the sheets' weights are measured from.
     Vec3 origin = Vec3::Zero();
+    Vec3 side = Vec3::Zero();  // the side of the point being projected, with sides
     auto gather = [&](const Vec3& p) {
-      if (!sheet_normals && gathered) return;
+      if (!sheet_normals && !sides && gathered) return;
       origin = sheet_normals ? p : centre;
       gathered = true;
-      set.resize(candidates);
-      for (int j = 0; j < candidates; ++j) {
-        const Index c = cand[j];
+      int kept = 0;
+      for (int j = 0; j < candidates; ++j)
+        kept += !sides || same_side(options.support_sides->row(cand[j]).dot(side));
+      set.resize(kept);
+      for (int j = 0, jj = 0; jj < candidates; ++jj) {
+        const Index c = cand[jj];
+        if (sides && !same_side(options.support_sides->row(c).dot(side))) continue;
         set.x[j] = s(c, 0) - origin.x(); set.y[j] = s(c, 1) - origin.y(); set.z[j] = s(c, 2) - origin.z();
         set.h[j] = h(c);
         set.inv_h2[j] = inv_h2(c);
@@ -96,12 +105,14 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
         double along = 0.0;
         if (sheet_normals) along = sheet_normals->row(c).dot(s.row(c) - p.transpose());
         set.extra[j] = sheet_extra * along * along;
+        ++j;
       }
     };
     for (std::size_t t = b; t < e; ++t) {
       const auto i = static_cast<std::size_t>(order[t]);
       const Vec3 p = x.row(static_cast<Eigen::Index>(i)).transpose();
       const Vec3 near_at = near ? Vec3(s.row((*near)[i]).transpose()) : p;
+      if (sides) side = options.point_sides->row(static_cast<Eigen::Index>(i)).transpose();
       if (candidates == 0) near ? query_at_support((*near)[i]) : query(p);
       gather(p);
       // The foot and the plane are kept relative to p; the candidates are relative to origin.

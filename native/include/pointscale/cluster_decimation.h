@@ -17,7 +17,10 @@ struct Clustering {
 // read_order  #P: the order in which the points are read, or nullptr for 0..#P-1. The splits sum
 //             over the points in this order, so a caller that renumbers the points and passes
 //             the old numbering's order gets the same clusters, bit for bit.
+// side_normals #P by 3 oriented normals, or nullptr. With them, a cluster whose normals disagree
+//             (both sides of a wall thinner than it) is first split by the side its points face,
+//             so that no cluster, and no centroid, straddles a thin sheet.
 Clustering cluster_decimate(const Points& points, std::size_t target, double max_variation = 0.05,
-                            const IndexList* read_order = nullptr);
+                            const IndexList* read_order = nullptr, const Points* side_normals = nullptr);
 
 }  // namespace pointscale

@@ -18,6 +18,9 @@ struct DecomposeOptions {
   MlsOptions mls;             // projection neighbours, tolerance, iteration cap
   int consistency_iterations = 60;  // cap per round for making offsets exactly normal
   const DiffusionOptions* diffusion = nullptr;  // smoother "diffusion" (Sec. 5.1): diffuse each Q^{l-1} first
+  // Keep two-sided thin sheets apart (thin_sheets.h), telling the sides by the input normals,
+  // which must then be given; the projection's normal kernel is mls.sheet x h wide.
+  bool thin_sheets = false;
 };
 
 // What happened at one level, for the user.

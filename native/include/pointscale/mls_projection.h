@@ -21,6 +21,12 @@ struct MlsOptions {
   const Points* support_normals = nullptr;
   double sheet = 0.2;         // normal kernel width as a fraction of h, in (0, 1]
   bool thin_sheets = false;   // the same weights with normals estimated from 16 support neighbours
+  // Sides (decompose's thin sheets, thin_sheets.h): oriented normals of the points (#X by 3)
+  // and of the support points (#S by 3). A point's fit then takes only the support points that
+  // face its own way (same_side in thin_sheets.h), so the far side of a wall of any thickness never weighs in,
+  // while the near side is smoothed as it would be alone. Both or neither.
+  const Points* point_sides = nullptr;
+  const Points* support_sides = nullptr;
   // The order in which the points are projected (spatial_order.h), or nullptr to compute a
   // Morton order; callers projecting the same points repeatedly compute it once.
   const IndexList* order = nullptr;
