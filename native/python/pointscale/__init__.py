@@ -8,13 +8,14 @@ from .multiscale import (Decomposition, Reconstructor, blend, coarse_base_warnin
                          reconstruct_levels)
 from .surface import decimate, estimate_normals, project
 from .folds import Folds, find_folds
+from .mirror import Mirror
 from .operators import (Morph, decompose_rayshoot, diffusion_levels, ellipsoid_base, encode, morph, project_sheets,
                         rays_missed_points, shoot_rays, smooth_diffusion)
-from . import io, meshes, parts, shapes
+from . import io, meshes, mirror, parts, shapes
 
 __version__ = "0.1.0"
 __all__ = [
-    "Cancelled", "Decomposition", "Folds", "Reconstructor", "blend", "find_folds", "coarse_base_warning", "decimate", "decompose",
+    "Cancelled", "Decomposition", "Folds", "Mirror", "Reconstructor", "blend", "find_folds", "coarse_base_warning", "decimate", "decompose",
     "estimate_normals", "load",
     "io", "project", "reconstruct", "reconstruct_levels", "shapes",
     "Morph", "decompose_rayshoot", "diffusion_levels", "ellipsoid_base", "encode", "morph", "project_sheets",

@@ -78,7 +78,7 @@ def reference_for(dec, reference: str = "input"):
     if key not in dec._cache:
         if dec._model.bands < 1:
             raise ValueError("the decomposition has no bands")
-        input_points = reconstruct(dec) if reference == "input" else None
+        input_points = dec._full(reconstruct(dec)) if reference == "input" else None
         dec._cache[key] = _core.fold_reference(dec._model, input_points)
     return dec._cache[key]
 
@@ -93,8 +93,8 @@ def find_folds(dec, points, base=None, *, fold_reference: str = "input") -> Fold
     if p.shape[0] != dec.n_points:
         raise ValueError(f"points must have the decomposition's {dec.n_points} points, got {p.shape[0]}")
     finite_result(p, "points")
-    kind = _core.find_folds(dec._model, ref, p, _base_array(dec, base))
-    return Folds(kind=kind, before=kind.copy(), limiter=np.ones(dec.n_points))
+    kind = _core.find_folds(dec._model, ref, dec._full(p), _base_array(dec, base))
+    return _of_half(dec, Folds(kind=kind, before=kind.copy(), limiter=np.ones(len(kind))))
 
 
 def _fold_mode_option(folds) -> str:
@@ -105,13 +105,24 @@ def _fold_mode_option(folds) -> str:
 
 def with_folds(dec, points: np.ndarray, base, mode: str, reference: str):
     """(points, Folds) for reconstruct(folds="report" or "prevent"): `points` is its result,
-    limited in place when preventing."""
+    limited in place when preventing. For a mirrored decomposition `points` and `base` are the
+    whole model's, and the Folds the half's."""
     ref = reference_for(dec, reference)
     if mode == "report":
         kind = _core.find_folds(dec._model, ref, points, base)
-        return points, Folds(kind=kind, before=kind.copy(), limiter=np.ones(dec.n_points))
+        return points, _of_half(dec, Folds(kind=kind, before=kind.copy(), limiter=np.ones(len(kind))))
     points = np.require(points, np.float64, ("C", "W"))
     rep = _core.limit_folds(dec._model, ref, points, base, dec.origin, MAX_FOLD_ROUNDS)
-    limiter = rep["limiter"] if rep["limiter"] is not None else np.ones(dec.n_points)
-    return points, Folds(kind=rep["after"], before=rep["before"], limiter=limiter, rounds=int(rep["rounds"]),
-                         capped=bool(rep["capped"]))
+    limiter = rep["limiter"] if rep["limiter"] is not None else np.ones(len(points))
+    return points, _of_half(dec, Folds(kind=rep["after"], before=rep["before"], limiter=limiter,
+                                       rounds=int(rep["rounds"]), capped=bool(rep["capped"])))
+
+
+def _of_half(dec, folds: Folds) -> Folds:
+    """The folds of a mirrored decomposition's whole model as its half's: a point folds when
+    any of its reflections does, and keeps the least gain any of them kept."""
+    m = dec._mirror
+    if m is None:
+        return folds
+    return Folds(kind=m.any_of_orbit(folds.kind), before=m.any_of_orbit(folds.before),
+                 limiter=m.least_of_orbit(folds.limiter), rounds=folds.rounds, capped=folds.capped)
