@@ -4,6 +4,7 @@ keeps thin sheets apart.
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -182,7 +183,7 @@ def shoot_rays(origins, directions, onto, *, kernel: float = 1.0, neighbors: int
 
 def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neighbors: int = 24,
            tolerance: float = 1e-9, max_iterations: int = 50, max_variation: float = 0.05, threads: int = 0,
-           progress=None) -> Decomposition:
+           progress=None, faces=None, edges=None) -> Decomposition:
     """Encodes a model onto a user-given base surface (Sec. 8.2, Fig. 8): a one-band Decomposition.
 
     points       (n, 3) the model
@@ -196,7 +197,17 @@ def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neigh
     whose recomputed normal passes through it; it then stays at its projection, and gain 1 misses
     it by its tangential offset. stats[0]["pinned"] counts such points and
     stats[0]["consistency_residual"] is the largest such error (0 up to rounding when none).
+    faces, edges  optional connectivity of the model, as for decompose: each connected part is
+                 then encoded onto the base alone (pointscale.parts_onto_base); a part too small
+                 for a band of its own keeps none, with a warning that names it.
     """
+    if faces is not None or edges is not None:
+        from .parts import connected_parts
+        labels, count = connected_parts(as_points(points), faces, edges)
+        if count > 1:
+            options = dict(base_normals=base_normals, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
+                           max_iterations=max_iterations, max_variation=max_variation, threads=threads)
+            return _encode_by_part(points, base_points, labels, count, options, progress)
     p = as_points(points, min_count=MIN_COARSE_POINTS)
     b = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)
     require_surface(b, "base_points", allow_planar=True)
@@ -219,6 +230,35 @@ def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neigh
                     max_iterations=max_iterations, max_variation=max_variation, base_points=len(b))
     dec = Decomposition(model, origin, settings)
     _require_finite_model(dec)
+    return dec
+
+
+def _encode_by_part(points, base_points, labels, count, options, progress) -> Decomposition:
+    """encode() of each connected part alone, joined into one Decomposition."""
+    from .parts_onto_base import encode_by_part
+    p = as_points(points)
+    b = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)
+    require_near(p, centre(b), "points", "base_points")
+    neighbors = positive(options["neighbors"], "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
+    origin = centre(np.vstack([p, b]))
+    if np.bincount(labels, minlength=count).max() < MIN_COARSE_POINTS:
+        raise ValueError(f"every connected part is too small to encode (each needs {MIN_COARSE_POINTS} points); "
+                         "encode without faces and edges to treat the parts as one surface")
+
+    def encode_one(part_points, part_progress):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return encode(part_points, b, progress=part_progress, **options)
+
+    arrays, stats, reports, message = encode_by_part(p, labels, count, encode_one, neighbors, MIN_COARSE_POINTS,
+                                                     as_callback(progress), origin)
+    settings = dict(levels=2, encoding="base", kernel=options["kernel"], neighbors=neighbors,
+                    tolerance=options["tolerance"], max_iterations=options["max_iterations"],
+                    max_variation=options["max_variation"], base_points=len(b), parts=reports)
+    dec = Decomposition(_core.Model.from_arrays(arrays), origin, settings, _stats=stats)
+    _require_finite_model(dec)
+    if message:
+        warnings.warn(message, stacklevel=3)
     return dec
 
 
@@ -264,14 +304,29 @@ class Morph:
 
 def morph(points_a, points_b, base_points, *, base_normals=None, kernel: float = 1.0, neighbors: int = 24,
           interpolation_neighbors: int = 8, tolerance: float = 1e-9, max_iterations: int = 50, threads: int = 0,
-          progress=None) -> Morph:
+          progress=None, faces_a=None, edges_a=None, faces_b=None, edges_b=None) -> Morph:
     """Morph between two models through a common base surface (Sec. 8.3, Eq. 22).
 
     points_a, points_b  (n_a, 3), (n_b, 3); the counts may differ. Align and scale them first.
     base_points         samples of a base close to both, e.g. ellipsoid_base(points_a, points_b)
     Both are projected onto the base; B's offsets are carried onto A's samples by Gaussian-weighted
     interpolation over the interpolation_neighbors nearest projected B samples.
+    faces_a, edges_a, faces_b, edges_b  optional connectivity of both models: part i of A is then
+                        morphed into part i of B alone (parts numbered by their lowest vertex, so
+                        two versions of one mesh match), and B's offsets never cross from one
+                        part to another (pointscale.parts_onto_base).
     """
+    if any(c is not None for c in (faces_a, edges_a, faces_b, edges_b)):
+        from .parts_onto_base import matched_parts, morph_by_part
+        a, b = as_points(points_a, "points_a"), as_points(points_b, "points_b")
+        labels_a, labels_b, count = matched_parts(a, b, faces_a, edges_a, faces_b, edges_b)
+        if count > 1:
+            def morph_one(ia, ib, part_progress):
+                return morph(a[ia], b[ib], base_points, base_normals=base_normals, kernel=kernel,
+                             neighbors=neighbors, interpolation_neighbors=interpolation_neighbors,
+                             tolerance=tolerance, max_iterations=max_iterations, threads=threads,
+                             progress=part_progress)
+            return Morph(*morph_by_part(labels_a, labels_b, count, morph_one, as_callback(progress)))
     a = as_points(points_a, "points_a")
     b = as_points(points_b, "points_b")
     s = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)

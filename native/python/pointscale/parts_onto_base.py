@@ -1,0 +1,67 @@
+"""Connected parts for encode and morph: each part of a model goes onto the base alone.
+
+encode(..., faces=, edges=) encodes every connected part of the model onto the base by itself
+and joins the results as decompose does (pointscale.parts): no part's projections weigh in
+another's clusters or normals, so an edit of one part's base leaves the others as they were.
+morph(..., faces_a=, faces_b=, ...) morphs part i of A into part i of B (parts are numbered by
+their lowest vertex, so two versions of one character's mesh match), each pair alone, so that
+B's offsets are never carried from one part onto another.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .parts import connected_parts, decompose_parts, parts_warning
+
+#: encode keeps no decimation of the model: a part needs its own support points at full size.
+_NO_DECIMATION = 1.0
+
+
+def encode_by_part(p: np.ndarray, labels: np.ndarray, count: int, encode_one, neighbors: int, minimum: int,
+                   progress, origin: np.ndarray):
+    """(model arrays, stats, part reports, warning) of encode_one(points, progress) for each part."""
+    def one(points, _normals, _levels, part_progress):
+        return encode_one(points, part_progress)
+
+    arrays, stats, reports = decompose_parts(p, None, labels, count, 2, _NO_DECIMATION, neighbors, minimum, one,
+                                             progress, origin)
+    return arrays, stats, reports, parts_warning(reports, 2)
+
+
+def matched_parts(a: np.ndarray, b: np.ndarray, faces_a, edges_a, faces_b, edges_b):
+    """The parts of A and of B, matched by number: (labels_a, labels_b, count). Raises ValueError
+    when only one model has connectivity, or when their part counts differ."""
+    given_a = faces_a is not None or edges_a is not None
+    given_b = faces_b is not None or edges_b is not None
+    if given_a != given_b:
+        raise ValueError("morph keeps parts apart only with the connectivity of both models: give faces or edges "
+                         "for A and for B, or for neither")
+    labels_a, count_a = connected_parts(a, faces_a, edges_a)
+    labels_b, count_b = connected_parts(b, faces_b, edges_b)
+    if count_a != count_b:
+        raise ValueError(f"A has {count_a} connected parts and B has {count_b}: morph matches part i of A with part "
+                         "i of B, so both need the same parts (or morph them without faces and edges)")
+    return labels_a, labels_b, count_a
+
+
+def morph_by_part(labels_a: np.ndarray, labels_b: np.ndarray, count: int, morph_one, progress):
+    """Each part of A morphed into the same part of B by morph_one(index_a, index_b, progress):
+    the (base, normals, detail_a, detail_b, report) of A's points, in A's order."""
+    n = len(labels_a)
+    base, normals = np.empty((n, 3)), np.empty((n, 3))
+    detail_a, detail_b = np.empty(n), np.empty(n)
+    report = dict(not_converged=0, degenerate=0)
+    for part in range(count):
+        ia, ib = np.flatnonzero(labels_a == part), np.flatnonzero(labels_b == part)
+        sub = None
+        if progress is not None:
+            sub = (lambda f, s=part: progress((s + f) / count))
+        try:
+            m = morph_one(ia, ib, sub)
+        except ValueError as exc:
+            raise ValueError(f"part {part} (A: {len(ia)} points from vertex {ia[0]}, B: {len(ib)} points from "
+                             f"vertex {ib[0]}): {exc}") from None
+        base[ia], normals[ia], detail_a[ia], detail_b[ia] = m.base, m.normals, m.detail_a, m.detail_b
+        for key in report:
+            report[key] += int(m.report[key])
+    return base, normals, detail_a, detail_b, report
