@@ -39,16 +39,35 @@ class Decomposition:
     # reconstruct()'s working arrays, kept between calls: two (n, 3) arrays, 48 bytes per point,
     # which at 100k points saves 2-3 ms a call of faulting fresh pages in.
     _buffers: object = field(default_factory=_core.ReconstructionBuffers, repr=False, compare=False)
+    # A decomposition of a mirrored half (pointscale.mirror): _model holds the whole model, and
+    # every output for the half's points is symmetrised through this.
+    _mirror: object = field(default=None, repr=False, compare=False)
+
+    @property
+    def mirror(self):
+        """The pointscale.Mirror this decomposition is symmetric about, or None."""
+        return None if self._mirror is None else self._mirror.mirror
+
+    def _symmetric(self, points: np.ndarray) -> np.ndarray:
+        """The whole model's (N, 3) positions as the half's (n, 3); unchanged without a mirror."""
+        return points if self._mirror is None else self._mirror.symmetric(points)
+
+    def _full(self, points: np.ndarray) -> np.ndarray:
+        """The half's (n, 3) positions as the whole model's; unchanged without a mirror."""
+        return points if self._mirror is None else self._mirror.full(points)
 
     @property
     def base(self) -> np.ndarray:
         """P^0, the smoothest level: (n, 3)."""
-        return self._model.base + self.origin
+        return self._symmetric(self._model.base + self.origin)
 
     @property
     def details(self) -> np.ndarray:
-        """D^0..D^{k-1}, signed along the outward normals of each level: (k, n)."""
-        return self._model.details
+        """D^0..D^{k-1}, signed along the outward normals of each level: (k, n). Mirrored: each
+        point's orbit average, so level(l) + details[l] * normals(l) is level(l + 1) only to
+        within the whole model's own asymmetry."""
+        details = self._model.details
+        return details if self._mirror is None else self._mirror.symmetric_values(details)
 
     @property
     def n_levels(self) -> int:
@@ -61,7 +80,7 @@ class Decomposition:
 
     @property
     def n_points(self) -> int:
-        return self._model.base.shape[0]
+        return self._model.base.shape[0] if self._mirror is None else self._mirror.n
 
     @property
     def parts(self) -> list[dict] | None:
@@ -72,7 +91,8 @@ class Decomposition:
     @property
     def part_labels(self) -> np.ndarray | None:
         """(n,) the part of each point, or None for one part."""
-        return self._model.parts
+        parts = self._model.parts
+        return parts if parts is None or self._mirror is None else parts[: self._mirror.n]
 
     @property
     def stats(self) -> list[dict]:
@@ -85,8 +105,9 @@ class Decomposition:
             levels, normals = self._model.reconstruct(np.ones(self.n_bands), None, True, -1, None, self.origin)
             for level in levels:
                 finite_result(level, "a level of this decomposition")
-            self._cache["levels"] = list(levels)
-            self._cache["normals"] = list(normals)
+            symmetric_normals = (lambda a: a) if self._mirror is None else self._mirror.symmetric_normals
+            self._cache["levels"] = [self._symmetric(level) for level in levels]
+            self._cache["normals"] = [symmetric_normals(normal) for normal in normals]
         return self._cache["levels"], self._cache["normals"]
 
     def level(self, l: int) -> np.ndarray:
@@ -104,6 +125,8 @@ class Decomposition:
         arrays["settings"] = np.frombuffer(json.dumps(self.settings).encode(), dtype=np.uint8)
         arrays["stats"] = np.frombuffer(json.dumps(self.stats).encode(), dtype=np.uint8)
         arrays["format_version"] = np.array([_FORMAT_VERSION])
+        if self._mirror is not None:
+            arrays.update(self._mirror.to_arrays())
         return arrays
 
     @classmethod
@@ -112,8 +135,10 @@ class Decomposition:
         dtypes, shapes against n and the band count, index ranges, finiteness, the settings);
         anything wrong raises one ValueError saying what."""
         core_arrays, origin, settings = _checked_arrays(arrays)
+        from .mirror import saved_symmetry
+        symmetry = saved_symmetry(settings, arrays, core_arrays["base"].shape[0])
         model = _core.Model.from_arrays(core_arrays)  # checks the structure again, for C++ callers
-        return cls(model, origin, settings, _stats=_checked_stats(arrays, model.bands))
+        return cls(model, origin, settings, _stats=_checked_stats(arrays, model.bands), _mirror=symmetry)
 
     def save(self, path) -> None:
         """Writes one .npz file."""
@@ -323,7 +348,7 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
               neighbors: int = 24, tolerance: float = 1e-7, max_iterations: int = 30,
               max_variation: float = 0.05, smoother: str = "mls", encoding: str = "projection",
               diffusion_iterations: int = 10, lam: float = 0.5, taubin: bool = True, diffusion_neighbors: int = 10,
-              threads: int = 0, progress=None, faces=None, edges=None) -> Decomposition:
+              threads: int = 0, progress=None, faces=None, edges=None, mirror=None, sheets: bool = False) -> Decomposition:
     """Builds the multiscale representation P^0 + D^0 + ... + D^{k-1} of a point cloud (Sec. 7).
 
     points      (n, 3) positions; a mesh's vertices work as they are
@@ -345,15 +370,32 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
                 lie close together neither blend nor move with each other's edits; a part too
                 small for `levels` keeps the levels it supports, with a warning that names it.
                 dec.parts lists the parts. A vertex in no face or edge joins its nearest part.
+    sheets      keep two-sided thin sheets apart (a leaf, sheet metal, a wall scanned from both
+                sides, thinner than the kernel): the sides are told apart by the normals, which
+                must then face outward (given, or estimated and oriented when None). A point's
+                fits, clusters and level normals then take only points whose normals turn less
+                than 120 degrees from its own, so a surface that turns further within a kernel
+                (a wire, a sharp rim) is not smoothed across either. Off by default: it costs
+                time (README, "Thin sheets").
+    mirror      optional pointscale.Mirror (or axes such as "x"): `points` are one half of a model
+                symmetric about those planes; the whole model is decomposed and every output is
+                exactly symmetric, points on a plane stay on it (pointscale.mirror)
     Supported input: coordinates within +-1e150, spanning 1e-50 to 1e50 about their centre
     (_checks.py says why); levels up to 64, kernel 0.001..1000, max_iterations up to 1000,
     diffusion_iterations up to 10000 and below what Taubin's lam|mu pair keeps stable. Anything
     else raises ValueError, as does a diffusion that would not give the input back.
     """
+    if mirror is not None:
+        arguments = dict(locals())  # every argument, so options added later pass through too
+        from .mirror import decompose_mirrored
+        return decompose_mirrored(**arguments)
     if smoother not in ("mls", "diffusion"):
         raise ValueError(f"smoother must be 'mls' or 'diffusion', got {smoother!r}")
     if encoding not in ("projection", "rayshoot"):
         raise ValueError(f"encoding must be 'projection' or 'rayshoot', got {encoding!r}")
+    if sheets and (encoding != "projection" or smoother != "mls"):
+        raise ValueError("sheets=True keeps thin sheets apart with the MLS smoother and projection encoding; "
+                         f"smoother={smoother!r} and encoding={encoding!r} would blend the two sides")
     if faces is not None or edges is not None:
         from .parts import connected_parts
         p = as_points(points)
@@ -362,7 +404,7 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
             options = dict(decimation=decimation, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
                            max_iterations=max_iterations, max_variation=max_variation, smoother=smoother,
                            encoding=encoding, diffusion_iterations=diffusion_iterations, lam=lam, taubin=taubin,
-                           diffusion_neighbors=diffusion_neighbors, threads=threads)
+                           diffusion_neighbors=diffusion_neighbors, threads=threads, sheets=sheets)
             return _decompose_by_part(p, labels, count, levels, normals, options, as_callback(progress))
     from . import operators  # imports this module: import it late
     if encoding == "rayshoot":
@@ -394,16 +436,21 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     if message:
         warnings.warn(message, stacklevel=2)
     n_arr = as_normals_of(normals, p)
+    if sheets:
+        from .sheets import sheet_sides
+        n_arr = sheet_sides(p, n_arr, threads)
     progress = as_callback(progress)
     origin = centre(p)
     settings = dict(levels=levels, decimation=decimation, kernel=kernel, neighbors=neighbors,
                     tolerance=tolerance, max_iterations=max_iterations, max_variation=max_variation,
                     smoother=smoother, encoding=encoding)
+    if sheets:
+        settings["sheets"] = True
     if diffusion is not None:
         settings["diffusion"] = dict(zip(("neighbors", "lam", "mu", "iterations"), diffusion))
     set_threads(threads)
     model = _core.decompose(p, origin, n_arr, levels, decimation, kernel, neighbors, tolerance,
-                            max_iterations, max_variation, diffusion, progress)
+                            max_iterations, max_variation, diffusion, progress, thin_sheets=bool(sheets))
     dec = Decomposition(model, origin, settings)
     _require_finite_model(dec)
     if diffusion is not None:
@@ -443,6 +490,8 @@ def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> 
                         tolerance=options["tolerance"], max_iterations=options["max_iterations"],
                         max_variation=options["max_variation"], smoother=options["smoother"],
                         encoding=options["encoding"], parts=reports)
+    if options.get("sheets"):
+        dec_settings["sheets"] = True
     dec = Decomposition(model, origin, dec_settings, _stats=stats)
     _require_finite_model(dec)
     for message in (coarse_base_warning(int(sizes.max()), levels, decimation), parts_warning(reports, levels)):
@@ -475,18 +524,21 @@ def _gains_array(dec: Decomposition, gains) -> np.ndarray:
         raise ValueError("gains contain NaN or infinite values")
     if g.size and np.abs(g).max() > MAX_GAIN:
         raise ValueError(f"gains must be within +-{MAX_GAIN:.0e}, got {np.abs(g).max():.3g}")
+    if g.ndim == 2 and dec._mirror is not None:
+        g = dec._mirror.full_values(g)  # a point's reflections take its gains
     return np.ascontiguousarray(g)
 
 
 def _base_array(dec: Decomposition, base):
-    """The edited base, checked, in world coordinates (the core centres it)."""
+    """The edited base, checked, in world coordinates (the core centres it); of a mirrored
+    decomposition, the half's base mirrored to the whole model."""
     if base is None:
         return None
     b = as_points(base, "base")
     if b.shape[0] != dec.n_points:
         raise ValueError(f"base must have the decomposition's {dec.n_points} points, got {b.shape[0]}")
     require_near(b, dec.origin, "base", "the decomposition")
-    return b
+    return dec._full(b)
 
 
 def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None, folds: str = "ignore",
@@ -513,8 +565,9 @@ def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None, fol
     out = dec._model.reconstruct(g, b, False, -1, as_callback(progress), dec.origin, dec._buffers)
     out = finite_result(out, "the reconstruction")
     if mode == "ignore":
-        return out
-    return with_folds(dec, out, b, mode, fold_reference)
+        return dec._symmetric(out)
+    out, found = with_folds(dec, out, b, mode, fold_reference)
+    return dec._symmetric(out), found
 
 
 class Reconstructor:
@@ -535,15 +588,15 @@ class Reconstructor:
         """As pointscale.reconstruct(dec, gains, base): the finest level, (n, 3)."""
         g = _gains_array(self._dec, gains)
         b = _base_array(self._dec, base)
-        return finite_result(self._core.reconstruct(g, b, as_callback(progress), self._dec.origin),
-                             "the reconstruction")
+        return self._dec._symmetric(finite_result(self._core.reconstruct(g, b, as_callback(progress),
+                                                                         self._dec.origin), "the reconstruction"))
 
 
 def reconstruct_levels(dec: Decomposition, gains=None, base=None) -> np.ndarray:
     """Every level P^0..P^k rebuilt like reconstruct(): (k+1, n, 3)."""
     _check_decomposition(dec)
     levels, _ = dec._model.reconstruct(_gains_array(dec, gains), _base_array(dec, base), True, -1, None, dec.origin)
-    return finite_result(np.stack(levels), "the reconstruction")
+    return finite_result(np.stack([dec._symmetric(level) for level in levels]), "the reconstruction")
 
 
 def blend(dec: Decomposition, t: float) -> np.ndarray:

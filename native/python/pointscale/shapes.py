@@ -119,3 +119,56 @@ def handle_angles(result, points, handle, centres, surface) -> np.ndarray:
         normal = np.linalg.svd(ring - ring.mean(axis=0), full_matrices=False)[2][2]
         angles.append(np.degrees(np.arccos(abs(axis @ normal) / np.linalg.norm(axis))))
     return np.array(angles)
+
+
+def thin_plate(size_u: float = 2.0, size_v: float = 1.6, spacing: float = 0.025, gap: float | None = None,
+               bend: float = 0.0):
+    """A two-sided plate: two grids `gap` apart (default one spacing), bent by bend * u**2.
+
+    Returns (points, outward normals, side): side is +1 for the upper sheet, -1 for the lower,
+    and row i of the upper sheet lies over row i of the lower one.
+    """
+    gap = spacing if gap is None else gap
+    u, v = np.meshgrid(np.arange(-size_u / 2, size_u / 2 + spacing / 2, spacing),
+                       np.arange(-size_v / 2, size_v / 2 + spacing / 2, spacing))
+    u, v = u.ravel(), v.ravel()
+    mid = bend * u ** 2
+    up = np.c_[-2.0 * bend * u, np.zeros_like(u), np.ones_like(u)]
+    up /= np.linalg.norm(up, axis=1)[:, None]
+    centre = np.c_[u, v, mid]
+    points = np.r_[centre + 0.5 * gap * up, centre - 0.5 * gap * up]
+    return points, np.r_[up, -up], np.r_[np.ones(len(u)), -np.ones(len(u))]
+
+
+def _box_surface(half: np.ndarray, spacing: float):
+    """Grid samples of a box's surface (half-sizes `half`), each once, with outward normals."""
+    points, normals = [], []
+    for axis in range(3):
+        others = [a for a in range(3) if a != axis]
+        ticks = [np.linspace(-half[a], half[a], max(2, int(round(2 * half[a] / spacing)) + 1)) for a in others]
+        s, t = (g.ravel() for g in np.meshgrid(*ticks))
+        for sign in (-1.0, 1.0):
+            p = np.zeros((len(s), 3))
+            p[:, axis], p[:, others[0]], p[:, others[1]] = sign * half[axis], s, t
+            n = np.zeros_like(p)
+            n[:, axis] = sign
+            points.append(p)
+            normals.append(n)
+    points, normals = np.concatenate(points), np.concatenate(normals)
+    _, first = np.unique(np.round(points / spacing, 6), axis=0, return_index=True)  # edges once
+    first.sort()
+    return points[first], normals[first]
+
+
+def thin_walled_box(size=(2.0, 1.6, 1.2), spacing: float = 0.025, gap: float | None = None):
+    """A closed box whose walls are `gap` thick (default one spacing), sampled on both sides.
+
+    Returns (points, outward normals of the wall, outer): outer is True on the outside, whose
+    normals point away from the box; the inside's point into the cavity.
+    """
+    gap = spacing if gap is None else gap
+    half = np.asarray(size, dtype=float) / 2
+    outer_p, outer_n = _box_surface(half, spacing)
+    inner_p, inner_n = _box_surface(half - gap, spacing)
+    outer = np.r_[np.ones(len(outer_p), bool), np.zeros(len(inner_p), bool)]
+    return np.r_[outer_p, inner_p], np.r_[outer_n, -inner_n], outer

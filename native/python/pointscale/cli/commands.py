@@ -113,9 +113,10 @@ def cmd_decompose(args) -> None:
             dec = decompose(scan.points, levels=args.levels, decimation=args.decimation, kernel=args.kernel,
                             neighbors=args.neighbors, normals=scan.normals, smoother=args.smoother,
                             encoding=args.encoding, threads=args.threads, progress=progress.stage("decomposing"),
-                            faces=scan.faces if args.parts == "faces" and scan.n_faces else None)
+                            faces=scan.faces if args.parts == "faces" and scan.n_faces else None,
+                            sheets=args.sheets)
         except ValueError as exc:
-            if str(exc).startswith(("points", "normals", "all points")):  # about the file's data: name it
+            if str(exc).startswith(("points", "normals", "all points", "sheets")):  # about the file's data: name it
                 raise ValueError(f"{args.input}: {exc}") from None
             if str(exc).startswith("every connected part"):
                 raise ValueError(f"{args.input}: {exc}; on the command line, --parts none") from None

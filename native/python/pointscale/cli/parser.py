@@ -62,6 +62,10 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
     d.add_argument("--parts", choices=("faces", "none"), default="faces",
                    help="faces: a mesh's connected parts (by its faces) are decomposed apart, so close parts "
                         "neither blend nor move together; none: every point is one surface")
+    d.add_argument("--sheets", action="store_true",
+                   help="keep two-sided thin sheets apart (leaves, sheet metal, walls scanned from both sides): the "
+                        "sides are told apart by the file's normals, which must face outward, or by normals "
+                        "estimated and oriented when it has none; costs time (README, Thin sheets)")
     d.add_argument("--format", help="extension of the level files, e.g. .ply or .las (default: the input's)")
     d.add_argument("--force", action="store_true",
                    help="replace an earlier decomposition in the output folder (its level files are removed)")
