@@ -96,3 +96,16 @@ def quads_to_triangles(faces: np.ndarray) -> np.ndarray:
     if faces.shape[1] == 3:
         return faces
     return np.concatenate([faces[:, [0, 1, 2]], faces[:, [0, 2, 3]]])
+
+
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Unit vertex normals: each vertex's area-weighted face normals summed, as Blender computes
+    them, outward where the faces wind outward. faces (m, 3) or (m, 4); returns (n, 3)."""
+    tri = quads_to_triangles(np.asarray(faces))
+    a, b, c = (vertices[tri[:, i]] for i in range(3))
+    face = np.cross(b - a, c - a)  # twice the area, along the normal
+    out = np.zeros_like(vertices, dtype=np.float64)
+    for i in range(3):
+        np.add.at(out, tri[:, i], face)
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return out / np.where(length > 0, length, 1.0)

@@ -531,14 +531,18 @@ def _gains_array(dec: Decomposition, gains) -> np.ndarray:
 
 def _base_array(dec: Decomposition, base):
     """The edited base, checked, in world coordinates (the core centres it); of a mirrored
-    decomposition, the half's base mirrored to the whole model."""
+    decomposition, the half's edit (its move from dec.base) mirrored onto the whole model's own
+    base, so that every point the edit leaves alone keeps its base bit for bit (the whole model
+    is symmetric only to rounding and its clusters' asymmetry, which an edit must not add)."""
     if base is None:
         return None
     b = as_points(base, "base")
     if b.shape[0] != dec.n_points:
         raise ValueError(f"base must have the decomposition's {dec.n_points} points, got {b.shape[0]}")
     require_near(b, dec.origin, "base", "the decomposition")
-    return dec._full(b)
+    if dec._mirror is None:
+        return b
+    return (dec._model.base + dec.origin) + dec._mirror.full_vectors(b - dec.base)
 
 
 def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None, folds: str = "ignore",
