@@ -186,3 +186,19 @@ def test_bad_mirror_values(half):
     flat[:, 0] = CENTRE[0]
     with pytest.raises(ValueError, match="all points lie on the x mirror plane"):
         ps.decompose(flat, levels=3, mirror=ps.Mirror("x", origin=CENTRE))
+
+
+def test_points_off_the_plane_stay_off_the_seam(half):
+    # A level that pulls a point towards the plane must not make it a seam point: Blender's Mirror
+    # modifier would merge it with its reflection. Near the poles level 0 pulls points this close.
+    points, _, _ = half
+    seam = 2e-3
+    dec = ps.decompose(points, levels=4, mirror=ps.Mirror("x", CENTRE, seam=seam))
+    off = np.abs(points[:, 0] - CENTRE[0]) > seam
+    symmetry = dec._mirror
+    averaged = symmetry._average(dec._model.base + dec.origin - CENTRE, True)
+    assert (np.abs(averaged[off, 0]) <= seam).sum() > 0  # without the rule some would be on the seam
+    for l in range(dec.n_levels):
+        side = dec.level(l)[off, 0] - CENTRE[0]
+        assert side.min() > seam, l
+    assert (ps.reconstruct(dec, [2.0, 2.0, 2.0])[off, 0] - CENTRE[0]).min() > seam

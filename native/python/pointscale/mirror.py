@@ -11,7 +11,10 @@ has its plane coordinate exactly 0 there at every level, with any gains or edite
 the partners of a point are its exact reflections. A round trip with unit gains gives the half
 back exactly, its seam points snapped onto their planes.
 
-Seam points (within `seam` of a plane) are kept once, not doubled across their plane.
+Seam points (within `seam` of a plane) are kept once, not doubled across their plane. Every
+other point stays on its side, farther than the seam from the plane (by OFF_SEAM): a level that
+pulls it towards the plane would otherwise make it a seam point, and Blender's Mirror modifier
+would merge it with its reflection.
 """
 from __future__ import annotations
 
@@ -25,6 +28,9 @@ from ._checks import MAX_COORDINATE, as_normals_of, as_points
 AXES = "xyz"
 #: The seam tolerance when none is given, as a fraction of the half's bounding-box diagonal.
 DEFAULT_SEAM = 1e-6
+#: A point off the planes is kept at least this many seams away from them: just beyond the seam,
+#: with room for single-precision rounding of the result (a mesh's coordinates).
+OFF_SEAM = 1.01
 
 
 @dataclass(frozen=True)
@@ -78,8 +84,9 @@ class Symmetry:
     points (n) and the whole model's (N). Whole point j is the reflection `element[j]` (a bit
     per plane) of half point `source[j]`; the first n are the half itself."""
 
-    def __init__(self, mirror: Mirror, on_plane: np.ndarray):
+    def __init__(self, mirror: Mirror, on_plane: np.ndarray, sides):
         self.mirror = mirror
+        self.sides = tuple(int(side) for side in sides)  # per plane, +1 or -1: the side the half is on
         self.on_plane = np.ascontiguousarray(on_plane, dtype=bool)  # (n, planes): seam points
         n, planes = self.on_plane.shape
         self.n = n
@@ -142,7 +149,15 @@ class Symmetry:
 
     def symmetric(self, points: np.ndarray) -> np.ndarray:
         """(N, 3) positions of the whole model -> (n, 3), averaged over each orbit."""
-        return self._average(points - self._origin, True) + self._origin
+        out = self._average(points - self._origin, True)
+        keep_off = OFF_SEAM * self.mirror.seam
+        for p, axis in enumerate(self.mirror.axis_indices):
+            off, side = ~self.on_plane[:, p], self.sides[p]
+            # Only points that came within the seam move (to just beyond it); the input's own
+            # points near it stay where they are, so the round trip stays exact.
+            into_seam = off & (side * out[:, axis] <= self.mirror.seam)
+            out[into_seam, axis] = side * keep_off
+        return out + self._origin
 
     def symmetric_normals(self, normals: np.ndarray) -> np.ndarray:
         """(N, 3) unit normals -> (n, 3), averaged over each orbit and normalised again."""
@@ -170,7 +185,7 @@ class Symmetry:
     # ---- saving
     def settings(self) -> dict:
         m = self.mirror
-        return {"axes": m.axes, "origin": list(m.origin), "seam": m.seam}
+        return {"axes": m.axes, "origin": list(m.origin), "seam": m.seam, "sides": list(self.sides)}
 
     def to_arrays(self) -> dict:
         return {"mirror_seam": self.on_plane.astype(np.uint8)}
@@ -183,6 +198,7 @@ def symmetry_of(points: np.ndarray, mirror: Mirror) -> Symmetry:
     seam = DEFAULT_SEAM * diagonal if mirror.seam is None else mirror.seam
     mirror = Mirror(mirror.axes, mirror.origin, seam)
     on_plane = np.zeros((len(points), len(mirror.axes)), dtype=bool)
+    sides = []
     for p, axis in enumerate(mirror.axis_indices):
         offset = points[:, axis] - mirror.origin[axis]
         on_plane[:, p] = np.abs(offset) <= seam
@@ -196,7 +212,8 @@ def symmetry_of(points: np.ndarray, mirror: Mirror) -> Symmetry:
         if not below and not above:
             raise ValueError(f"all points lie on the {name} mirror plane ({at}, seam tolerance {seam:.3g}): "
                              "there is no half to mirror")
-    return Symmetry(mirror, on_plane)
+        sides.append(1 if above else -1)
+    return Symmetry(mirror, on_plane, sides)
 
 
 def decompose_mirrored(points, mirror, normals=None, faces=None, edges=None, **options):
@@ -235,20 +252,24 @@ def saved_symmetry(settings: dict, arrays, n_full: int) -> Symmetry | None:
     if "mirror" not in settings or "mirror_seam" not in arrays:
         raise bad("a mirrored decomposition needs both settings['mirror'] and the mirror_seam array")
     saved = settings["mirror"]
-    if not isinstance(saved, dict) or set(saved) != {"axes", "origin", "seam"}:
-        raise bad("settings['mirror'] must be an object with exactly axes, origin and seam")
+    if not isinstance(saved, dict) or set(saved) != {"axes", "origin", "seam", "sides"}:
+        raise bad("settings['mirror'] must be an object with exactly axes, origin, seam and sides")
     try:
         mirror = Mirror(saved["axes"], saved["origin"], saved["seam"])
     except ValueError as exc:
         raise bad(f"settings['mirror']: {exc}") from None
     if mirror.seam is None or mirror.axes != saved["axes"]:
         raise bad(f"settings['mirror'] must give the axes in xyz order and a seam, got {json.dumps(saved)}")
+    sides = saved["sides"]
+    if not isinstance(sides, list) or len(sides) != len(mirror.axes) or any(
+            isinstance(side, bool) or side not in (1, -1) for side in sides):
+        raise bad(f"settings['mirror']['sides'] must list +1 or -1 for each of the {len(mirror.axes)} planes")
     on_plane = np.asarray(arrays["mirror_seam"])
     if on_plane.dtype != np.uint8 or on_plane.ndim != 2 or on_plane.shape[1] != len(mirror.axes) \
             or on_plane.shape[0] < 1 or on_plane.max() > 1:
         raise bad(f"mirror_seam must be (n, {len(mirror.axes)}) uint8 of 0 and 1, "
                   f"got {on_plane.dtype} {on_plane.shape}")
-    symmetry = Symmetry(mirror, on_plane.astype(bool))
+    symmetry = Symmetry(mirror, on_plane.astype(bool), sides)
     if symmetry.n_full != n_full:
         raise bad(f"mirror_seam makes a whole model of {symmetry.n_full} points, but the model has {n_full}")
     return symmetry
