@@ -1,0 +1,85 @@
+"""The mesh's Mirror modifier as the engine's mirror planes (no bpy: plain values in).
+
+Decompose reads the first Mirror modifier of the stack and passes its planes to the engine, so
+that the half-mesh is decomposed together with its reflection and the seam vertices stay on
+the plane: the modifier keeps merging them at every Scale and gain.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+AXES = "xyz"
+#: The seam tolerance when the modifier neither merges nor clips, as a fraction of the mesh's
+#: diagonal: vertices that are on the plane up to single-precision rounding.
+SMALL_SEAM = 1e-6
+#: How far from axis-aligned (relative) the mirror object's planes may be in the mesh's space.
+ALIGNED = 1e-6
+
+
+@dataclass(frozen=True)
+class MirrorPlanes:
+    """Mirror planes in the mesh's own coordinates: ps.Mirror's arguments."""
+
+    axes: str
+    origin: tuple
+    seam: float
+
+    def describe(self) -> str:
+        where = ", ".join(f"{a} = {self.origin[AXES.index(a)]:.4g}" for a in self.axes)
+        return f"the Mirror modifier's planes {where} (seam {self.seam:.3g})"
+
+
+def first_mirror(modifiers):
+    """The first Mirror modifier of the stack, or None; one hidden in the viewport counts as off."""
+    for modifier in modifiers:
+        if modifier.type == "MIRROR":
+            return modifier if modifier.show_viewport else None
+    return None
+
+
+def mirror_planes(use_axis, use_merge: bool, use_clip: bool, merge_threshold: float, diagonal: float,
+                  to_mirror_space=None) -> tuple[MirrorPlanes | None, str | None]:
+    """(planes, None), or (None, why the modifier cannot be honoured), or (None, None) for a
+    modifier that mirrors nothing.
+
+    use_axis         three bools, the modifier's X, Y, Z
+    merge_threshold  with merge, Blender joins a vertex with its reflection when they are closer
+                     than this, that is when the vertex is within half of it of the plane: those
+                     are the seam. With clipping alone, the vertices within it are held on the plane.
+    to_mirror_space  4x4, the mesh's coordinates -> the mirror object's (None: no mirror object).
+                     Its planes must be axis-aligned in the mesh's space; any translation, scale
+                     along the axes, or quarter turn is, a general rotation is not.
+    """
+    axes = [a for a, used in zip(range(3), use_axis) if used]
+    if not axes:
+        return None, None
+    if use_merge:
+        seam = 0.5 * float(merge_threshold)
+    elif use_clip:
+        seam = float(merge_threshold)
+    else:
+        seam = SMALL_SEAM * float(diagonal)
+    origin = np.zeros(3)
+    mesh_axes = axes
+    if to_mirror_space is not None:
+        m = np.asarray(to_mirror_space, dtype=np.float64)
+        linear, shift = m[:3, :3], m[:3, 3]
+        mesh_axes = []
+        for a in axes:
+            # Plane a of the mirror object is linear[a] . p + shift[a] = 0 in the mesh's space; it
+            # mirrors along one of the mesh's axes b only if that row and column b are zero elsewhere.
+            b = int(np.argmax(np.abs(linear[a])))
+            scale = np.abs(linear).max()
+            off_row = np.abs(np.delete(linear[a], b)).max()
+            off_column = np.abs(np.delete(linear[:, b], a)).max()
+            if not scale > 0 or max(off_row, off_column) > ALIGNED * scale:
+                return None, (f"the Mirror modifier's mirror object is rotated against the mesh, so its "
+                              f"{AXES[a].upper()} plane is not along one of the mesh's axes; Pointscale mirrors "
+                              "only along the mesh's axes. Align the mirror object (rotations by quarter turns "
+                              "are fine) or turn off Use Mirror Modifier")
+            origin[b] = -shift[a] / linear[a, b]
+            mesh_axes.append(b)
+    return MirrorPlanes("".join(AXES[b] for b in sorted(mesh_axes)), tuple(float(v) for v in origin), seam), None
