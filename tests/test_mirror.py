@@ -202,3 +202,25 @@ def test_points_off_the_plane_stay_off_the_seam(half):
         side = dec.level(l)[off, 0] - CENTRE[0]
         assert side.min() > seam, l
     assert (ps.reconstruct(dec, [2.0, 2.0, 2.0])[off, 0] - CENTRE[0]).min() > seam
+
+
+def test_the_command_line_mirror_option(half, tmp_path):
+    import subprocess
+    import sys
+    points, faces, seam = half
+    ps.io.write(tmp_path / "half.ply", ps.io.Scan(points=points, faces=faces))
+    origin = ",".join(repr(float(v)) for v in CENTRE)
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-m", "pointscale", "decompose", str(tmp_path / "half.ply"), "-o", str(out),
+                           "--levels", "3", "--mirror", "x", "--mirror-origin", origin],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "mirror symmetric about x" in done.stdout
+    dec = ps.load(out / "decomposition.npz")
+    assert dec.mirror.axes == "x" and dec.mirror.origin == tuple(CENTRE)
+    level0 = ps.io.read(out / "level_0.ply").points
+    assert np.abs(level0[seam, 0] - CENTRE[0]).max() <= 1e-7  # the file's single precision
+    bad = subprocess.run([sys.executable, "-m", "pointscale", "decompose", str(tmp_path / "half.ply"), "-o",
+                          str(tmp_path / "bad"), "--mirror", "y"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "both sides of the y mirror plane" in bad.stderr, bad.stderr
+    assert "Traceback" not in bad.stderr

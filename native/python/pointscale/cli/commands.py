@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import decompose, io, reconstruct, shapes
+from .. import Mirror, decompose, io, reconstruct, shapes
 from ..folds import with_folds
 from ..multiscale import _base_array
 from .folder import DECOMPOSITION_FILE, SOURCE_FILE, level_name, read_decomposition
@@ -29,6 +29,22 @@ def parse_gains(text: str, bands: int) -> np.ndarray:
     return gains
 
 
+def mirror_option(args):
+    """--mirror, --mirror-origin and --mirror-seam as a pointscale.Mirror, or None."""
+    if args.mirror is None:
+        if args.mirror_origin != "0,0,0" or args.mirror_seam is not None:
+            raise ValueError("--mirror-origin and --mirror-seam need --mirror (the axes, e.g. --mirror x)")
+        return None
+    try:
+        origin = [float(v) for v in args.mirror_origin.split(",")]
+    except ValueError:
+        raise ValueError(f"--mirror-origin must be three comma-separated numbers, got {args.mirror_origin!r}") from None
+    try:
+        return Mirror(args.mirror, origin, args.mirror_seam)
+    except ValueError as exc:
+        raise ValueError(f"--mirror: {exc}") from None
+
+
 def describe(dec, source=None) -> str:
     lines = [f"{dec.n_points} points, {dec.n_levels} levels (P^0..P^{dec.n_bands}), {dec.n_bands} detail bands"]
     for l, s in enumerate(dec.stats):
@@ -39,6 +55,9 @@ def describe(dec, source=None) -> str:
         short = sum(1 for part in dec.parts if part["levels"] < dec.n_levels)
         lines.append(f"  {len(dec.parts)} connected parts, decomposed apart"
                      + (f"; {short} keep fewer levels (see the warning)" if short else ""))
+    if dec.mirror is not None:
+        origin = ", ".join(f"{v:.6g}" for v in dec.mirror.origin)
+        lines.append(f"  mirror symmetric about {dec.mirror.axes} through ({origin}), seam {dec.mirror.seam:.3g}")
     if source is not None:
         lines.append("source: " + describe_source(source))
     return "\n".join(lines)
@@ -114,7 +133,7 @@ def cmd_decompose(args) -> None:
                             neighbors=args.neighbors, normals=scan.normals, smoother=args.smoother,
                             encoding=args.encoding, threads=args.threads, progress=progress.stage("decomposing"),
                             faces=scan.faces if args.parts == "faces" and scan.n_faces else None,
-                            sheets=args.sheets)
+                            sheets=args.sheets, mirror=mirror_option(args))
         except ValueError as exc:
             if str(exc).startswith(("points", "normals", "all points", "sheets")):  # about the file's data: name it
                 raise ValueError(f"{args.input}: {exc}") from None

@@ -66,6 +66,15 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
                    help="keep two-sided thin sheets apart (leaves, sheet metal, walls scanned from both sides): the "
                         "sides are told apart by the file's normals, which must face outward, or by normals "
                         "estimated and oriented when it has none; costs time (README, Thin sheets)")
+    d.add_argument("--mirror", metavar="AXES",
+                   help="the input is one half of a mirror-symmetric model, e.g. x (the plane x = 0), xy or xyz: "
+                        "the half and its reflections are decomposed as one, so the result is exactly symmetric "
+                        "and points on a plane stay on it at every level; about twice the time for one plane "
+                        "(README, Mirror symmetry)")
+    d.add_argument("--mirror-origin", metavar="X,Y,Z", default="0,0,0",
+                   help="the point the mirror planes pass through, in the file's coordinates")
+    d.add_argument("--mirror-seam", metavar="DISTANCE", type=float,
+                   help="points this close to a plane are on it (default: 1e-6 of the bounding-box diagonal)")
     d.add_argument("--format", help="extension of the level files, e.g. .ply or .las (default: the input's)")
     d.add_argument("--force", action="store_true",
                    help="replace an earlier decomposition in the output folder (its level files are removed)")
