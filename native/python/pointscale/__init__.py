@@ -9,9 +9,10 @@ from .multiscale import (Decomposition, Reconstructor, blend, coarse_base_warnin
 from .surface import decimate, estimate_normals, project
 from .folds import Folds, find_folds
 from .mirror import Mirror
-from .operators import (Morph, decompose_rayshoot, diffusion_levels, ellipsoid_base, encode, morph, project_sheets,
+from .morphing import Morph, morph
+from .operators import (decompose_rayshoot, diffusion_levels, ellipsoid_base, encode, project_sheets,
                         rays_missed_points, shoot_rays, smooth_diffusion)
-from . import io, meshes, mirror, parts, shapes
+from . import alignment, io, meshes, mirror, parts, shapes
 
 __version__ = "0.1.0"
 __all__ = [

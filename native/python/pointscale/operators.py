@@ -5,12 +5,10 @@ keeps thin sheets apart.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
-
 import numpy as np
 
 from . import _core
-from ._checks import (MAX_DIFFUSION_ITERATIONS, MAX_GAIN, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS, as_callback,
+from ._checks import (MAX_DIFFUSION_ITERATIONS, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS, as_callback,
                       as_normals_of, as_points, centre, finite_result, kernel_option, positive, require_extent, require_near,
                       require_stable_diffusion, require_surface, set_threads)
 from .multiscale import MIN_COARSE_POINTS, Decomposition, _decimation_option, _points_needed, _require_finite_model
@@ -275,82 +273,6 @@ def ellipsoid_base(points_a, points_b=None, n: int = 20000) -> np.ndarray:
         raise ValueError(f"the bounding box is flat (extent {2 * axes}): it holds no ellipsoid")
     from .shapes import fibonacci_sphere
     return 0.5 * (lo + hi) + fibonacci_sphere(n) * axes
-
-
-@dataclass
-class Morph:
-    """Both models over a common base (Sec. 8.3), on A's samples: p(alpha, beta) of Eq. 22."""
-
-    base: np.ndarray       #: (n_a, 3) A's samples projected onto the base
-    normals: np.ndarray    #: (n_a, 3) oriented base normals there
-    detail_a: np.ndarray   #: (n_a,) A's normal offsets: base + detail_a * normals == A
-    detail_b: np.ndarray   #: (n_a,) B's offsets, interpolated onto A's samples
-    report: dict           #: projections that did not converge or had no plane
-
-    def evaluate(self, alpha: float = 1.0, beta: float = 0.0) -> np.ndarray:
-        """p_i + (alpha d_i^A + beta d_i^B) n_i: (1, 0) is A, (0, 1) is B on A's samples; any
-        real alpha and beta, not only convex combinations (Fig. 10a). Returns (n_a, 3)."""
-        try:
-            alpha, beta = float(alpha), float(beta)
-        except (TypeError, ValueError):
-            raise ValueError(f"alpha and beta must be numbers, got {alpha!r}, {beta!r}") from None
-        if not (np.isfinite(alpha) and np.isfinite(beta)):
-            raise ValueError(f"alpha and beta must be finite, got {alpha}, {beta}")
-        if max(abs(alpha), abs(beta)) > MAX_GAIN:
-            raise ValueError(f"alpha and beta must be within +-{MAX_GAIN:.0e}, got {alpha}, {beta}")
-        out = self.base + (alpha * self.detail_a + beta * self.detail_b)[:, None] * self.normals
-        return finite_result(out, "the morph")
-
-
-def morph(points_a, points_b, base_points, *, base_normals=None, kernel: float = 1.0, neighbors: int = 24,
-          interpolation_neighbors: int = 8, tolerance: float = 1e-9, max_iterations: int = 50, threads: int = 0,
-          progress=None, faces_a=None, edges_a=None, faces_b=None, edges_b=None) -> Morph:
-    """Morph between two models through a common base surface (Sec. 8.3, Eq. 22).
-
-    points_a, points_b  (n_a, 3), (n_b, 3); the counts may differ. Align and scale them first.
-    base_points         samples of a base close to both, e.g. ellipsoid_base(points_a, points_b)
-    Both are projected onto the base; B's offsets are carried onto A's samples by Gaussian-weighted
-    interpolation over the interpolation_neighbors nearest projected B samples.
-    faces_a, edges_a, faces_b, edges_b  optional connectivity of both models: part i of A is then
-                        morphed into part i of B alone (parts numbered by their lowest vertex, so
-                        two versions of one mesh match), and B's offsets never cross from one
-                        part to another (pointscale.parts_onto_base).
-    """
-    if any(c is not None for c in (faces_a, edges_a, faces_b, edges_b)):
-        from .parts_onto_base import matched_parts, morph_by_part
-        a, b = as_points(points_a, "points_a"), as_points(points_b, "points_b")
-        labels_a, labels_b, count = matched_parts(a, b, faces_a, edges_a, faces_b, edges_b)
-        if count > 1:
-            def morph_one(ia, ib, part_progress):
-                return morph(a[ia], b[ib], base_points, base_normals=base_normals, kernel=kernel,
-                             neighbors=neighbors, interpolation_neighbors=interpolation_neighbors,
-                             tolerance=tolerance, max_iterations=max_iterations, threads=threads,
-                             progress=part_progress)
-            return Morph(*morph_by_part(labels_a, labels_b, count, morph_one, as_callback(progress)))
-    a = as_points(points_a, "points_a")
-    b = as_points(points_b, "points_b")
-    s = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)
-    require_surface(s, "base_points", allow_planar=True)
-    require_near(a, centre(s), "points_a", "base_points")
-    require_near(b, centre(s), "points_b", "base_points")
-    kernel = kernel_option(kernel)
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
-    k = positive(interpolation_neighbors, "interpolation_neighbors", integer=True, maximum=MAX_NEIGHBORS)
-    tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
-    bn = None
-    if base_normals is not None:
-        bn = as_points(base_normals, "base_normals")
-        if bn.shape != s.shape:
-            raise ValueError(f"base_normals must have the shape of base_points {s.shape}, got {bn.shape}")
-    origin = centre(np.vstack([a, b, s]))
-    set_threads(threads)
-    r = _core.morph(a - origin, b - origin, s - origin, bn, kernel, neighbors, tolerance, max_iterations, k,
-                    as_callback(progress))
-    for key in ("base", "normals", "detail_a", "detail_b"):
-        finite_result(r[key], f"the morph's {key.replace('_', ' ')}")
-    return Morph(r["base"] + origin, r["normals"], r["detail_a"], r["detail_b"],
-                 {"not_converged": int(r["not_converged"]), "degenerate": int(r["degenerate"])})
 
 
 def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decimation: float = 0.25,

@@ -1,0 +1,129 @@
+"""Morphing two models through a common base (Sec. 8.3, Eq. 22), aligned first if asked."""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import _core
+from ._checks import (MAX_GAIN, MAX_ITERATIONS, MAX_NEIGHBORS, as_callback, as_points, centre, finite_result,
+                      kernel_option, positive, require_near, require_surface, set_threads)
+from .multiscale import MIN_COARSE_POINTS
+
+#: Below this overlap of A's and B's bounding boxes (intersection over union) morph warns:
+#: the base lies far from one of them, and beta = 1 would land away from B.
+OVERLAP_WARNING = 0.25
+
+
+@dataclass
+class Morph:
+    """Both models over a common base (Sec. 8.3), on A's samples: p(alpha, beta) of Eq. 22."""
+
+    base: np.ndarray       #: (n_a, 3) A's samples projected onto the base
+    normals: np.ndarray    #: (n_a, 3) oriented base normals there
+    detail_a: np.ndarray   #: (n_a,) A's normal offsets: base + detail_a * normals == A
+    detail_b: np.ndarray   #: (n_a,) B's offsets, interpolated onto A's samples
+    report: dict           #: projections that did not converge or had no plane; the models' overlap
+    #: With alignment, the similarity that carries the aligned B back to where B is
+    #: (pointscale.alignment.Similarity); None when B was morphed where it lies.
+    placement: object = field(default=None)
+
+    def evaluate(self, alpha: float = 1.0, beta: float = 0.0) -> np.ndarray:
+        """p_i + (alpha d_i^A + beta d_i^B) n_i: (1, 0) is A, (0, 1) is B on A's samples; any
+        real alpha and beta, not only convex combinations (Fig. 10a). With alignment, beta also
+        moves the shape from A's place to B's, linearly: (0, 1) is B where B lies, so Blender's
+        relative shape keys, which blend linearly, give the same result. Returns (n_a, 3)."""
+        try:
+            alpha, beta = float(alpha), float(beta)
+        except (TypeError, ValueError):
+            raise ValueError(f"alpha and beta must be numbers, got {alpha!r}, {beta!r}") from None
+        if not (np.isfinite(alpha) and np.isfinite(beta)):
+            raise ValueError(f"alpha and beta must be finite, got {alpha}, {beta}")
+        if max(abs(alpha), abs(beta)) > MAX_GAIN:
+            raise ValueError(f"alpha and beta must be within +-{MAX_GAIN:.0e}, got {alpha}, {beta}")
+        out = self.base + (alpha * self.detail_a + beta * self.detail_b)[:, None] * self.normals
+        if self.placement is not None:
+            b_here = self.base + self.detail_b[:, None] * self.normals
+            out = out + beta * (self.placement.apply(b_here) - b_here)
+        return finite_result(out, "the morph")
+
+
+def morph(points_a, points_b, base_points=None, *, align: str = "none", base_normals=None, kernel: float = 1.0,
+          neighbors: int = 24, interpolation_neighbors: int = 8, tolerance: float = 1e-9, max_iterations: int = 50,
+          threads: int = 0, progress=None, faces_a=None, edges_a=None, faces_b=None, edges_b=None) -> Morph:
+    """Morph between two models through a common base surface (Sec. 8.3, Eq. 22).
+
+    points_a, points_b  (n_a, 3), (n_b, 3); the counts may differ. They must overlap: a warning
+                        says when their bounding boxes share less than OVERLAP_WARNING.
+    base_points         samples of a base close to both, e.g. ellipsoid_base(points_a, points_b);
+                        None takes that ellipsoid (of A and the aligned B)
+    align               "none", or how to carry B onto A first (pointscale.alignment): "bbox"
+                        (bounding boxes), "pca" (principal axes) or "icp" (principal axes, then
+                        iterative closest points). The morph is then computed on the aligned B,
+                        and evaluate(0, 1) puts B back where it lies.
+    Both are projected onto the base; B's offsets are carried onto A's samples by Gaussian-weighted
+    interpolation over the interpolation_neighbors nearest projected B samples.
+    faces_a, edges_a, faces_b, edges_b  optional connectivity of both models: part i of A is then
+                        morphed into part i of B alone (parts numbered by their lowest vertex, so
+                        two versions of one mesh match), and B's offsets never cross from one
+                        part to another (pointscale.parts_onto_base).
+    """
+    from .alignment import METHODS, overlap, similarity
+    if align not in METHODS:
+        raise ValueError(f"align must be one of {', '.join(METHODS)}, got {align!r}")
+    a, b = as_points(points_a, "points_a"), as_points(points_b, "points_b")
+    placement = None
+    if align != "none":
+        carry = similarity(b, a, align)
+        b, placement = carry.apply(b), carry.inverse()
+    if base_points is None:
+        from .operators import ellipsoid_base
+        base_points = ellipsoid_base(a, b)
+    share = overlap(a, b)
+    if share < OVERLAP_WARNING:
+        warnings.warn(f"A and B barely overlap (their bounding boxes share {share:.0%}), so the base lies far from "
+                      "one of them and the morph will not reach B; align them first, e.g. morph(..., align='bbox'), "
+                      "'pca' or 'icp'", stacklevel=2)
+    options = dict(base_normals=base_normals, kernel=kernel, neighbors=neighbors,
+                   interpolation_neighbors=interpolation_neighbors, tolerance=tolerance,
+                   max_iterations=max_iterations, threads=threads)
+    result = None
+    if any(c is not None for c in (faces_a, edges_a, faces_b, edges_b)):
+        from .parts_onto_base import matched_parts, morph_by_part
+        labels_a, labels_b, count = matched_parts(a, b, faces_a, edges_a, faces_b, edges_b)
+        if count > 1:
+            def morph_one(ia, ib, part_progress):
+                return _morph_where_they_lie(a[ia], b[ib], base_points, progress=part_progress, **options)
+            result = Morph(*morph_by_part(labels_a, labels_b, count, morph_one, as_callback(progress)))
+    if result is None:
+        result = _morph_where_they_lie(a, b, base_points, progress=progress, **options)
+    result.report["overlap"] = share
+    result.placement = placement
+    return result
+
+
+def _morph_where_they_lie(a, b, base_points, *, base_normals, kernel, neighbors, interpolation_neighbors,
+                          tolerance, max_iterations, threads, progress) -> Morph:
+    s = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)
+    require_surface(s, "base_points", allow_planar=True)
+    require_near(a, centre(s), "points_a", "base_points")
+    require_near(b, centre(s), "points_b", "base_points")
+    kernel = kernel_option(kernel)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
+    k = positive(interpolation_neighbors, "interpolation_neighbors", integer=True, maximum=MAX_NEIGHBORS)
+    tolerance = positive(tolerance, "tolerance")
+    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
+    bn = None
+    if base_normals is not None:
+        bn = as_points(base_normals, "base_normals")
+        if bn.shape != s.shape:
+            raise ValueError(f"base_normals must have the shape of base_points {s.shape}, got {bn.shape}")
+    origin = centre(np.vstack([a, b, s]))
+    set_threads(threads)
+    r = _core.morph(a - origin, b - origin, s - origin, bn, kernel, neighbors, tolerance, max_iterations, k,
+                    as_callback(progress))
+    for key in ("base", "normals", "detail_a", "detail_b"):
+        finite_result(r[key], f"the morph's {key.replace('_', ' ')}")
+    return Morph(r["base"] + origin, r["normals"], r["detail_a"], r["detail_b"],
+                 {"not_converged": int(r["not_converged"]), "degenerate": int(r["degenerate"])})
