@@ -43,11 +43,31 @@ def get(mesh, name):
     return None if kbs is None else kbs.get(name)
 
 
+CREATED_BASIS = "pointscale_created_basis"  # mesh ID property: the Basis is this add-on's
+
+
 def ensure_basis(obj):
     if obj.data.shape_keys is None:
         obj.shape_key_add(name="Basis", from_mix=False)
         obj.data.shape_keys.use_relative = True
+        obj.data[CREATED_BASIS] = True
     return obj.data.shape_keys.reference_key
+
+
+def remove_created_basis(obj) -> bool | None:
+    """Removes the Basis this add-on created once no other key needs it, so that modifiers can be
+    applied again. True when removed, False when other keys still need it, None when it is the
+    artist's own (or there is none)."""
+    mesh = obj.data
+    if not mesh.get(CREATED_BASIS):
+        return None
+    kbs = key_blocks(mesh)
+    if kbs is not None and len(kbs) > 1:
+        return False
+    if kbs is not None:
+        obj.shape_key_clear()  # the mesh keeps the Basis' positions
+    del mesh[CREATED_BASIS]
+    return True
 
 
 def owned(mesh, old_k: int) -> set:

@@ -39,17 +39,67 @@ def apply_layout(obj, layout, basis=None) -> list:
     return kept
 
 
-def clear(obj) -> None:
+def clear(obj) -> list:
+    """Removes everything a decompose made: its keys (and the Basis when the add-on made it and
+    nothing else needs it), the stored decomposition, the detail colours (restoring the colour
+    attributes that were active and rendered before Show Details), the Folds group and the band
+    masks nobody painted. Returns notes on what it kept for the artist: painted masks, a Basis
+    that other keys need."""
     mesh = obj.data
     settings = mesh.multiscale
-    keys.remove_layout(obj, max(settings.n_bands, 0))
+    k = max(settings.n_bands, 0)
+    keys.remove_layout(obj, k)
     storage.clear(mesh)
+    restore_colors(mesh)
     mesh_io.remove_attributes(mesh, storage.COLOR)
+    notes = []
+    folds = obj.vertex_groups.get(keys.FOLDS)
+    if folds is not None:
+        obj.vertex_groups.remove(folds)
+    masks = [keys.mask_name(l) for l in range(k) if obj.vertex_groups.get(keys.mask_name(l)) is not None]
+    weights = mesh_io.read_group_weights(obj, masks, len(mesh.vertices)) if masks else []
+    painted = []
+    for name, w in zip(masks, weights):
+        if w is not None and np.all(w == 1.0):
+            obj.vertex_groups.remove(obj.vertex_groups[name])  # as Decompose made it
+        else:
+            painted.append(name)
+    if painted:
+        notes.append(f"kept the painted {', '.join(painted)} (delete them under Vertex Groups if unwanted)")
+    if keys.remove_created_basis(obj) is False:
+        notes.append("kept the Basis key: other shape keys need it")
     settings.n_vertices = 0
     settings.n_bands = 0
     settings.bands.clear()
     settings.scale_store = 0.0
     mesh.update()
+    return notes
+
+
+SHOWN_COLORS = "pointscale_colors"  # mesh ID property: the colour attributes before Show Details
+
+
+def remember_colors(mesh) -> None:
+    """The active and render colour attributes' names, before Show Details first replaces them."""
+    if SHOWN_COLORS in mesh.keys():
+        return
+    colors = mesh.color_attributes
+    active = colors.active_color.name if colors.active_color is not None else ""
+    render = colors[colors.render_color_index].name if 0 <= colors.render_color_index < len(colors) else ""
+    mesh[SHOWN_COLORS] = {"active": active, "render": render}
+
+
+def restore_colors(mesh) -> None:
+    if SHOWN_COLORS not in mesh.keys():
+        return
+    saved = mesh[SHOWN_COLORS]
+    colors = mesh.color_attributes
+    active, render = colors.get(saved.get("active", "")), saved.get("render", "")
+    if active is not None:
+        colors.active_color = active
+    if colors.get(render) is not None:
+        colors.render_color_index = colors.find(render)
+    del mesh[SHOWN_COLORS]
 
 
 def decomposition(mesh, ps):

@@ -30,6 +30,13 @@ class DecomposedOperator:
         if problem:
             self.report({"ERROR"}, problem)
             return None
+        self.entered_mode = obj.mode
         if obj.mode != "OBJECT":
             bpy.ops.object.mode_set(mode="OBJECT")
         return obj
+
+    def return_to_mode(self, obj) -> None:
+        """Back to the mode the artist ran the operator from (Edit, Sculpt, Weight Paint...)."""
+        mode = getattr(self, "entered_mode", "OBJECT")
+        if mode != "OBJECT" and obj.mode != mode:
+            bpy.ops.object.mode_set(mode=mode)

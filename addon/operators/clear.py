@@ -1,4 +1,5 @@
-"""Clear: remove everything a decompose wrote (keys, masks stay, attributes, settings state)."""
+"""Clear: remove everything a decompose wrote: keys, the Basis it made, attributes, colours,
+unpainted masks and the settings' state."""
 
 from __future__ import annotations
 
@@ -8,8 +9,9 @@ from .. import state, storage, writeback
 
 
 class POINTSCALE_OT_clear(bpy.types.Operator):
-    """Remove the Level, Band and result keys and the stored decomposition from the mesh.
-    The Basis, other shape keys and the band mask vertex groups are kept"""
+    """Remove everything Decompose made: the Level, Band and result keys (and the Basis it
+    created, unless other keys need it), the stored decomposition, the detail colours and the
+    band masks that were not painted. Other shape keys and painted masks are kept"""
 
     bl_idname = "pointscale.clear"
     bl_label = "Clear Multiscale Data"
@@ -30,7 +32,8 @@ class POINTSCALE_OT_clear(bpy.types.Operator):
         obj = context.active_object
         if obj.mode != "OBJECT":
             bpy.ops.object.mode_set(mode="OBJECT")
-        writeback.clear(obj)
+        for note in writeback.clear(obj):
+            self.report({"INFO"}, f"Clear '{obj.name}': {note}")
         return {"FINISHED"}
 
 

@@ -76,6 +76,7 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
             return {"CANCELLED"}
         writeback.show_result(obj, keys.EDIT, result)
         report_folds(self, obj, folds, "Rebuilt the detail")
+        self.return_to_mode(obj)
         return {"FINISHED"}
 
 
@@ -116,6 +117,7 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
                     kb.value = 0.0
         gains = ", ".join(f"{1 + v:.2f}" for v in values)
         report_folds(self, obj, folds, f"Baked gains ({gains}) into '{keys.FILTER}'")
+        self.return_to_mode(obj)
         return {"FINISHED"}
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import bpy
 
-from .. import logic, mesh_io, storage
+from .. import logic, mesh_io, storage, writeback
 from ._common import DecomposedOperator
 
 
@@ -55,6 +55,7 @@ class POINTSCALE_OT_show_details(DecomposedOperator, bpy.types.Operator):
         except ValueError as exc:
             self.report({"ERROR"}, f"Show Details on '{obj.name}': {exc}")
             return {"CANCELLED"}
+        writeback.remember_colors(mesh)
         rgba = logic.detail_colors(d, self.scale or None)
         mesh_io.write_attribute(mesh, storage.COLOR, "FLOAT_COLOR", rgba)
         attr = mesh.color_attributes.get(storage.COLOR)

@@ -80,8 +80,9 @@ def test_edit_mode_workflow_writes_level0_and_rebuilds():
             v.co.z += 0.3
             top.append(v.index)
     bmesh.update_edit_mesh(me)
-    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}  # leaves Edit mode itself
-    assert obj.mode == "OBJECT"
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    assert obj.mode == "EDIT"  # back where the artist was, to go on editing the base
+    bpy.ops.object.mode_set(mode="OBJECT")
     top = np.array(top)
     edited = h.key(me, "Level 0")
     assert np.allclose(edited[top, 2], level0[top, 2] + 0.3, atol=1e-5)  # the edit went to Level 0
