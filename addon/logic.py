@@ -28,6 +28,7 @@ __all__ = [
     "unpack_decomposition",
     "ellipsoid_points",
     "check_points",
+    "levels_that_fit",
 ]
 
 
@@ -257,3 +258,25 @@ def check_points(points: np.ndarray, minimum: int = 4) -> str | None:
     if bad.any():
         return f"{int(bad.sum())} vertices have NaN or infinite coordinates (first: index {int(np.argmax(bad))})"
     return None
+
+
+def levels_that_fit(n: int, levels: int, decimation: float, min_coarse: int) -> tuple[int, str | None]:
+    """The most levels (at most `levels`) whose coarsest keeps min_coarse of n points at this
+    decimation, and what to tell the artist when that is fewer than asked: (levels, message).
+    Raises ValueError when not even a base and one band fit."""
+    def fits(count: int) -> bool:
+        return np.floor(decimation ** (count - 1) * n) >= min_coarse
+
+    fitting = max((count for count in range(2, levels + 1) if fits(count)), default=0)
+    if fitting == levels:
+        return levels, None
+    need = int(np.ceil(min_coarse / decimation ** (levels - 1)))
+    if fitting < 2:
+        least = int(np.ceil(min_coarse / decimation))
+        raise ValueError(f"the mesh has {n} vertices, and even 2 levels at Decimation {decimation:g} need {least}: "
+                         "subdivide it (a Subdivision Surface modifier, applied) or decompose a denser mesh")
+    wanted = float(np.ceil(100 * (min_coarse / n) ** (1.0 / (levels - 1))) / 100)
+    hint = f"raise Decimation to {wanted:g}" if wanted < 1.0 else "use fewer levels"
+    return fitting, (f"the mesh has {n} vertices, and {levels} levels at Decimation {decimation:g} need {need}: "
+                     f"decomposed with {fitting} levels. For {levels}, subdivide the mesh (a Subdivision Surface "
+                     f"modifier, applied) or {hint}")

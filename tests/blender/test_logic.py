@@ -117,3 +117,22 @@ def test_decompose_warnings_come_from_the_job_not_from_other_threads(addon):
     worker.join()
     layout_warnings = result["layout"].warnings
     assert len(layout_warnings) == 1 and "support points at level 0" in layout_warnings[0]
+
+
+def test_levels_that_fit_a_small_mesh_say_what_to_do(logic):
+    import pointscale as ps
+
+    # Suzanne: 507 vertices, 4 levels at 0.25 need 512
+    levels, message = logic.levels_that_fit(507, 4, 0.25, 8)
+    assert levels == 3
+    assert "507 vertices" in message and "need 512" in message and "Subdivision Surface" in message
+    assert "raise Decimation to 0.26" in message
+    # the hint holds: the engine takes Suzanne's count at 4 levels with that decimation
+    points = ps.shapes.sphere(507, seed=1)
+    assert ps.decompose(points, 4, decimation=0.26).n_levels == 4
+    with pytest.raises(ValueError, match="need"):
+        ps.decompose(points, 4, decimation=0.25)
+    assert logic.levels_that_fit(100_000, 4, 0.25, 8) == (4, None)
+    assert logic.levels_that_fit(300, 5, 0.25, 8)[0] == 3  # 300 * 0.25**2 = 18.75 >= 8
+    with pytest.raises(ValueError, match="even 2 levels"):
+        logic.levels_that_fit(20, 4, 0.25, 8)
