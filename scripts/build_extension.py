@@ -1,19 +1,20 @@
 #!/usr/bin/env python3
 """Build the Blender extension zip: dist/<id>-<version>-linux_x64.zip.
 
-    python scripts/build_extension.py            # wheel + zip + validate
+    python scripts/build_extension.py            # wheels + zip + validate
     python scripts/build_extension.py --no-wheel # reuse dist/wheels (fast)
 
 Steps:
-1. ``pip wheel . --no-deps`` builds the engine wheel for this Python (cp311 =
-   Blender 4.2 .. 5.0); ``auditwheel repair`` turns it into a manylinux wheel
-   when auditwheel is installed.  For Blender 5.1+ run this script with a
-   Python 3.13 too (``--python python3.13``): both wheels land in
-   dist/wheels and both are listed in the manifest.
+1. ``pip wheel . --no-deps`` builds an engine wheel for each interpreter:
+   by default this one and the other environments setup.sh makes (.venv with
+   Python 3.11 = Blender 4.2 .. 5.0, .venv313 with 3.13 = Blender 5.1+), or
+   those given with ``--python``.  It says which it found.  ``auditwheel
+   repair`` turns each into a manylinux wheel when auditwheel is installed.
 2. ``plyfile`` (pure Python, an engine dependency) is fetched as a wheel.
-3. addon/ + blender_manifest.toml (with the real wheel names) + wheels/ are
-   staged in dist/stage/, then Blender's own extension tool, shipped in the
-   bpy wheel as addons_core/bl_pkg/cli/blender_ext.py, builds and validates.
+3. addon/ + blender_manifest.toml + wheels/ are staged in dist/stage/; the
+   staged manifest gets the real wheel names and the Blender version range
+   those wheels cover.  Blender's own extension tool, shipped in the bpy
+   wheel as addons_core/bl_pkg/cli/blender_ext.py, builds and validates.
 """
 
 from __future__ import annotations
@@ -62,6 +63,56 @@ def manifest_field(text: str, name: str) -> str:
     return m.group(1)
 
 
+# Which Blender releases ship which Python: (first release, first release that no longer does).
+# bpy on PyPI agrees: 4.2 .. 5.0.x are built for 3.11, 5.1+ for 3.13.
+BLENDER_FOR_PYTHON = {"311": ("4.2.0", "5.1.0"), "313": ("5.1.0", None)}
+SETUP_VENVS = (".venv", ".venv313")
+
+
+def version_key(v: str) -> tuple[int, ...]:
+    return tuple(int(x) for x in v.split("."))
+
+
+def ask(py: str, code: str) -> str | None:
+    """What `py -c code` prints, or None when py cannot run it."""
+    try:
+        out = subprocess.run([py, "-c", code], capture_output=True, text=True, timeout=60)
+    except OSError:
+        return None
+    return out.stdout.strip() if out.returncode == 0 else None
+
+
+def default_pythons() -> list[str]:
+    """This interpreter, and one more per Python version from setup.sh's environments."""
+    pythons, seen = [sys.executable], {f"{sys.version_info[0]}{sys.version_info[1]}"}
+    for venv in SETUP_VENVS:
+        py = ROOT / venv / "bin" / "python"
+        # The wheels build without isolation, so the interpreter needs the build tools.
+        tag = ask(str(py), "import sys, scikit_build_core, pybind11; print('%d%d' % sys.version_info[:2])")
+        if tag and tag not in seen:
+            pythons.append(str(py))
+            seen.add(tag)
+    names = ", ".join(f"cp{t}" for t in sorted(seen))
+    print(f"engine wheels for {names}: " + ", ".join(pythons), flush=True)
+    if "313" not in seen:
+        print("no Python 3.13 environment (.venv313), so no wheel for Blender 5.1+: ./scripts/setup.sh "
+              "makes it when Python 3.13 is installed (pyenv install 3.13)", flush=True)
+    return pythons
+
+
+def version_range(wheels: list[Path]) -> tuple[str, str | None]:
+    """blender_version_min and _max (exclusive, None = open) that the engine wheels cover."""
+    tags = {re.match(r"pointscale-[^-]+-cp(\d+)-", w.name).group(1) for w in wheels}
+    unknown = tags - BLENDER_FOR_PYTHON.keys()
+    if unknown:
+        sys.exit(f"no known Blender release ships Python {', '.join(sorted(unknown))} (BLENDER_FOR_PYTHON)")
+    ranges = sorted((BLENDER_FOR_PYTHON[t] for t in tags), key=lambda r: version_key(r[0]))
+    for (_, end), (start, _) in zip(ranges, ranges[1:]):
+        if end != start:
+            sys.exit(f"the wheels leave a gap in Blender versions ({end} .. {start}): build the ones between")
+    return ranges[0][0], ranges[-1][1]
+
+
 def build_wheels(pythons: list[str]) -> None:
     WHEELS.mkdir(parents=True, exist_ok=True)
     raw = DIST / "raw-wheels"
@@ -84,12 +135,13 @@ def build_wheels(pythons: list[str]) -> None:
             shutil.copy2(whl, WHEELS)
     for old in WHEELS.glob("plyfile-*.whl"):
         old.unlink()
-    # plyfile resolved against the NumPy that Blender ships (bpy's, which setup.sh keeps
-    # installed): plyfile 1.1.5 needs NumPy 2, while Blender 4.2-5.0 ship NumPy 1.26.
-    import numpy
-
+    # plyfile resolved against the oldest NumPy that a target Blender ships (bpy's, which setup.sh
+    # keeps installed): plyfile 1.1.5 needs NumPy 2, while Blender 4.2-5.0 ship NumPy 1.26.
+    numpys = [v for v in (ask(py, "import numpy; print(numpy.__version__)") for py in pythons) if v]
+    oldest = min(numpys, key=lambda v: version_key(re.sub(r"[^0-9.].*", "", v)), default=None)
+    pin = [f"numpy=={oldest}"] if oldest else []
     with tempfile.TemporaryDirectory() as tmp:
-        run([sys.executable, "-m", "pip", "download", "plyfile>=1.0", f"numpy=={numpy.__version__}",
+        run([sys.executable, "-m", "pip", "download", "plyfile>=1.0", *pin,
              "--only-binary=:all:", "-d", tmp])
         for whl in Path(tmp).glob("plyfile-*.whl"):
             shutil.copy2(whl, WHEELS / whl.name)
@@ -100,7 +152,8 @@ def stage(manifest_text: str) -> Path:
     shutil.copytree(ROOT / "addon", STAGE, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
     (STAGE / "wheels").mkdir()
     wheels = sorted(WHEELS.glob("*.whl"))
-    if not any(w.name.startswith("pointscale-") for w in wheels):
+    engines = [w for w in wheels if w.name.startswith("pointscale-")]
+    if not engines:
         sys.exit(f"no pointscale wheel in {WHEELS}: run without --no-wheel")
     for whl in wheels:
         shutil.copy2(whl, STAGE / "wheels" / whl.name)
@@ -108,6 +161,13 @@ def stage(manifest_text: str) -> Path:
     text, count = re.subn(r"^wheels\s*=\s*\[[^\]]*\]", listing, manifest_text, flags=re.M | re.S)
     if count != 1:
         sys.exit("blender_manifest.toml must have one `wheels = [...]` list")
+    low, high = version_range(engines)
+    text = re.sub(r"^blender_version_max\s*=.*\n", "", text, flags=re.M)
+    bounds = f'blender_version_min = "{low}"\n' + (f'blender_version_max = "{high}"\n' if high else "")
+    text, count = re.subn(r"^blender_version_min\s*=.*\n", lambda m: bounds, text, flags=re.M)
+    if count != 1:
+        sys.exit("blender_manifest.toml must have one blender_version_min")
+    print(f"Blender {low} .. {high or 'any later'} (" + ", ".join(w.name for w in engines) + ")", flush=True)
     (STAGE / "blender_manifest.toml").write_text(text)
     return STAGE
 
@@ -116,14 +176,15 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--no-wheel", action="store_true", help="reuse the wheels already in dist/wheels")
     ap.add_argument("--python", action="append", default=None,
-                    help="interpreter(s) to build engine wheels with (default: this one); repeat for cp313")
+                    help="interpreter(s) to build engine wheels with, repeatable "
+                         "(default: this one and setup.sh's .venv / .venv313)")
     args = ap.parse_args()
 
     manifest_text = (ROOT / "blender_manifest.toml").read_text()
     ext_id = manifest_field(manifest_text, "id")
     version = manifest_field(manifest_text, "version")
     if not args.no_wheel:
-        build_wheels(args.python or [sys.executable])
+        build_wheels(args.python or default_pythons())
     src = stage(manifest_text)
     tool = blender_ext()
     for old in glob.glob(str(DIST / f"{ext_id}-{version}*.zip")):

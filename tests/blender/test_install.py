@@ -1,5 +1,6 @@
 """Check 10: the built zip installs into a fresh user extension repository of real Blender,
-and Decompose runs through the installed copy with the bundled engine wheel.
+and Decompose runs through the installed copy with the bundled engine wheel. It runs under both
+bpy 4.5 and 5.2 (tests/test_blender_on_bpy52.py), on one zip that holds both engine wheels.
 
 Runs in a subprocess with its own BLENDER_USER_RESOURCES (a fresh user folder), and hides
 the developer's editable engine there, so only the zip's wheel can satisfy ``import pointscale``.
@@ -7,8 +8,10 @@ the developer's editable engine there, so only the zip's wheel can satisfy ``imp
 
 import json
 import os
+import re
 import subprocess
 import sys
+import tomllib
 import zipfile
 from pathlib import Path
 
@@ -45,9 +48,15 @@ print("RESULT" + json.dumps(out))
 '''
 
 
+# This Python's engine wheel tag: the zip must bundle it for this Blender to install it.
+CP = f"cp{sys.version_info.major}{sys.version_info.minor}"
+
+
 def _zip_is_current(path: Path) -> bool:
     with zipfile.ZipFile(path) as z:
         names = set(z.namelist())
+        if not any(re.fullmatch(rf"wheels/pointscale-[^/]*-{CP}-[^/]*\.whl", n) for n in names):
+            return False
         for src in (ROOT / "addon").rglob("*.py"):
             rel = src.relative_to(ROOT / "addon").as_posix()
             if rel not in names or z.read(rel) != src.read_bytes():
@@ -59,8 +68,9 @@ def _zip_is_current(path: Path) -> bool:
 def built_zip():
     zips = sorted((ROOT / "dist").glob("pointscale-*-linux_x64.zip"))
     if not zips or not _zip_is_current(zips[-1]):
-        # A fresh clone has no wheel yet: build it too (about half a minute), never skip.
-        have_wheel = bool(list((ROOT / "dist" / "wheels").glob("pointscale-*.whl")))
+        # A fresh clone has no wheels yet: build them too (for every Python that setup.sh set up,
+        # so the bpy 5.2 run reuses this zip), never skip.
+        have_wheel = bool(list((ROOT / "dist" / "wheels").glob(f"pointscale-*-{CP}-*.whl")))
         build = subprocess.run([sys.executable, str(ROOT / "scripts" / "build_extension.py")]
                                + (["--no-wheel"] if have_wheel else []), capture_output=True, text=True)
         assert build.returncode == 0, build.stdout[-3000:] + build.stderr[-3000:]
@@ -83,3 +93,16 @@ def test_zip_installs_and_decomposes(built_zip, tmp_path):
     assert out["decompose"] == ["FINISHED"] and out["rebuild"] == ["FINISHED"]
     assert out["keys"][:2] == ["Basis", "Level 0"] and "Band 2" in out["keys"]
     assert out["rebuild_error"] < 1e-5
+
+
+def test_zip_manifest_covers_its_wheels(built_zip):
+    # Blender 4.2-5.0 ship Python 3.11, 5.1+ ship 3.13: the range must be what the wheels serve,
+    # or Blender copies the zip in and then refuses to enable it.
+    with zipfile.ZipFile(built_zip) as z:
+        manifest = tomllib.loads(z.read("blender_manifest.toml").decode())
+        tags = {m.group(1) for n in z.namelist() if (m := re.fullmatch(r"wheels/pointscale-[^-]+-(cp\d+)-.*", n))}
+    assert CP in tags
+    expected = {frozenset({"cp311"}): ("4.2.0", "5.1.0"), frozenset({"cp313"}): ("5.1.0", None),
+                frozenset({"cp311", "cp313"}): ("4.2.0", None)}[frozenset(tags)]
+    assert (manifest["blender_version_min"], manifest.get("blender_version_max")) == expected
+    assert sorted(manifest["wheels"]) == sorted(f"./{n}" for n in z.namelist() if n.startswith("wheels/"))
