@@ -115,26 +115,28 @@ def bake(ps, dec, base: np.ndarray, band_values, mask_weights, prevent_folds: bo
                           folds="prevent" if prevent_folds else "report")
 
 
-def morph_keys(ps, a: np.ndarray, b: np.ndarray, base_points: np.ndarray | None = None, samples: int = 40000):
-    """Eq. 22 as three arrays: (projected A, A + alpha detail at (1,0), at (0,1)).
+def morph_keys(ps, a: np.ndarray, b: np.ndarray, base_points: np.ndarray | None = None, samples: int = 40000,
+               align: str = "NONE"):
+    """Eq. 22 as three arrays and the engine's warnings: (projected A, A + alpha detail at (1,0),
+    at (0,1), warnings).
 
-    p(alpha, beta) is linear in alpha and beta, so Blender's relative keys
-    ``A detail`` = p(1,0) and ``B detail`` = p(0,1) over the Basis p(0,0) evaluate it exactly.
+    p(alpha, beta) is linear in alpha and beta (also with alignment, whose placement follows
+    beta linearly), so Blender's relative keys ``A detail`` = p(1,0) and ``B detail`` = p(0,1)
+    over the Basis p(0,0) evaluate it exactly.
     """
-    if not hasattr(ps, "morph"):
-        raise ValueError("this pointscale engine has no morph() yet")
+    import warnings
+
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
-    if base_points is None:
-        if hasattr(ps, "ellipsoid_base"):
-            base_points = ps.ellipsoid_base(a, b, n=samples)
-        else:
-            lo = np.minimum(a.min(axis=0), b.min(axis=0))
-            hi = np.maximum(a.max(axis=0), b.max(axis=0))
-            base_points = logic.ellipsoid_points(lo, hi, samples)
-    m = ps.morph(a, b, np.asarray(base_points, dtype=np.float64))
-    if hasattr(m, "evaluate"):
-        return m.evaluate(0.0, 0.0), m.evaluate(1.0, 0.0), m.evaluate(0.0, 1.0)
-    # Eq. 22 from the parts: p + (alpha d_A + beta d_B) n
-    p, n = np.asarray(m.base), np.asarray(m.normals)
-    return p, p + np.asarray(m.detail_a)[:, None] * n, p + np.asarray(m.detail_b)[:, None] * n
+    if base_points is not None:
+        base_points = np.asarray(base_points, dtype=np.float64)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        m = ps.morph(a, b, base_points, align=align.lower(), base_samples=samples)
+    # The engine's overlap warning speaks Python: say it in the panel's words.
+    messages = tuple(str(w.message) for w in caught if not str(w.message).startswith("A and B barely overlap"))
+    if m.report["overlap"] < ps.morphing.OVERLAP_WARNING:
+        messages += (f"A and B barely overlap (their bounding boxes share {m.report['overlap']:.0%}), so the morph "
+                     "will not reach B: set Align in the Morph panel (Bounding Box, Principal Axes or Closest "
+                     "Points), or move B onto A",)
+    return m.evaluate(0.0, 0.0), m.evaluate(1.0, 0.0), m.evaluate(0.0, 1.0), messages

@@ -33,6 +33,27 @@ def read_edges(mesh) -> np.ndarray:
     return e.reshape(-1, 2)
 
 
+def read_vertex_normals(mesh) -> np.ndarray | None:
+    """(n, 3) Blender's vertex normals, outward where the faces are wound consistently; None for
+    a mesh without faces, whose vertex normals say nothing."""
+    if not len(mesh.polygons):
+        return None
+    n = np.empty(3 * len(mesh.vertices), dtype=np.float32)
+    mesh.vertex_normals.foreach_get("vector", n)
+    return n.reshape(-1, 3).astype(np.float64)
+
+
+def read_imported_normals(mesh) -> np.ndarray | None:
+    """(n, 3) the per-vertex `normal` attribute that Blender's PLY importer gives a point cloud,
+    or None when the mesh has none."""
+    attr = mesh.attributes.get("normal")
+    if attr is None or attr.domain != "POINT" or attr.data_type != "FLOAT_VECTOR":
+        return None
+    n = np.empty(3 * len(mesh.vertices), dtype=np.float32)
+    attr.data.foreach_get("vector", n)
+    return n.reshape(-1, 3).astype(np.float64)
+
+
 def read_key(kb) -> np.ndarray:
     seq = _key_seq(kb)
     n = len(seq)

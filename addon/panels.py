@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import engine, keys, state, storage
+from . import engine, keys, mirror_modifier, state, storage
 from .operators import morph as morph_ops
 
 
@@ -72,6 +72,10 @@ class POINTSCALE_PT_decompose(_Sub, bpy.types.Panel):
         col.prop(s, "encoding")
         col.prop(s, "neighbors")
         col.prop(s, "keep_parts")
+        col.prop(s, "thin_sheets")
+        row = col.row()
+        row.active = mirror_modifier.first_mirror(context.active_object.modifiers) is not None
+        row.prop(s, "use_mirror_modifier")
         row = layout.row()
         row.scale_y = 1.4
         row.operator("pointscale.decompose", icon="MOD_SMOOTH")
@@ -150,6 +154,7 @@ class POINTSCALE_PT_morph(_Sub, bpy.types.Panel):
             layout.prop(s, "morph_base_object")
         else:
             layout.prop(s, "morph_samples")
+        layout.prop(s, "morph_align")
         layout.operator("pointscale.morph", icon="MOD_SIMPLEDEFORM")
         _why(layout, morph_ops.morph_problem(context))
 

@@ -110,6 +110,21 @@ class MULTISCALE_PG_settings(bpy.types.PropertyGroup):
         "close parts do not blend and an edit of one part's base leaves the others as they are",
         default=True,
     )
+    use_mirror_modifier: BoolProperty(
+        name="Use Mirror Modifier",
+        description="When the mesh has a Mirror modifier, decompose the half together with its reflection, so "
+        "that the seam stays on the mirror plane and merged at every level and gain (axes, mirror object, "
+        "merge distance and clipping are read from the first Mirror modifier)",
+        default=True,
+    )
+    thin_sheets: BoolProperty(
+        name="Keep Thin Sheets Apart",
+        description="Keep the two sides of walls thinner than the smoothing kernel apart (leaves, ears, "
+        "clothing, sheet metal), told apart by the vertex normals (estimated for a mesh without faces). "
+        "Surfaces that turn by more than 120 degrees within the kernel are then not smoothed across. "
+        "Slower, so off by default",
+        default=False,
+    )
     # --- state written by Decompose
     n_vertices: IntProperty(name="Vertices", description="Vertex count at decompose time", default=0)
     n_bands: IntProperty(name="Bands", default=0)
@@ -157,6 +172,18 @@ class MULTISCALE_PG_settings(bpy.types.PropertyGroup):
     )
     morph_samples: IntProperty(
         name="Base Samples", description="Points sampled on the ellipsoid base", default=40000, min=1000
+    )
+    morph_align: EnumProperty(
+        name="Align",
+        description="Carry B onto A before the morph, for models that do not overlap where they lie; at "
+        "'B detail' = 1 the morph lands where B is",
+        items=[
+            ("NONE", "None", "Morph A and B where they lie (they must overlap)"),
+            ("BBOX", "Bounding Box", "Move and scale B's bounding box onto A's"),
+            ("PCA", "Principal Axes", "Move, turn and scale B's principal axes onto A's"),
+            ("ICP", "Closest Points", "Principal axes, then iterative closest points"),
+        ],
+        default="NONE",
     )
     use_modal: BoolProperty(default=True, options={"HIDDEN"})
 

@@ -10,8 +10,9 @@ error leaves the mesh exactly as it was.
 from __future__ import annotations
 
 import bpy
+import numpy as np
 
-from .. import compute, engine, keys, mesh_io, preferences, state, writeback
+from .. import compute, engine, keys, mesh_io, mirror_modifier, preferences, state, writeback
 from ..job import Job
 
 
@@ -21,6 +22,25 @@ def _problem(context):
     if problem is None:
         problem = state.running_problem(obj)
     return problem
+
+
+def _mirror_planes(obj, points):
+    """The planes of the first Mirror modifier in the mesh's coordinates, or None when there is
+    none (or Use Mirror Modifier is off); ValueError when its settings cannot be honoured."""
+    modifier = mirror_modifier.first_mirror(obj.modifiers)
+    if modifier is None or not obj.data.multiscale.use_mirror_modifier:
+        return None
+    to_mirror_space = None
+    if modifier.mirror_object is not None:
+        # Blender mirrors in the mirror object's space: the mesh's coordinates -> world -> its.
+        to_mirror_space = np.array(modifier.mirror_object.matrix_world.inverted() @ obj.matrix_world)
+    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    planes, problem = mirror_modifier.mirror_planes(
+        tuple(modifier.use_axis), modifier.use_mirror_merge, modifier.use_clip, modifier.merge_threshold,
+        diagonal, to_mirror_space)
+    if problem:
+        raise ValueError(f"{problem} (modifier '{modifier.name}')")
+    return planes
 
 
 def _prepare(op, context):
@@ -36,11 +56,34 @@ def _prepare(op, context):
         kwargs = compute.decompose_kwargs(
             ps, s.levels, s.decimation, s.kernel, s.neighbors, preferences.get(context).threads, s.smoother, s.encoding
         )
-        problem = compute.logic.check_points(points) or keys.layout_problem(mesh, s.levels - 1, s.n_bands)
+        problem = compute.logic.check_points(points)
+        if problem:
+            raise ValueError(problem)
+        # A mesh too small for the levels asked gets the levels it supports, and is told how to
+        # get the rest; the panel's setting stays as the artist set it.
+        kwargs["levels"], op._levels_note = compute.logic.levels_that_fit(
+            len(points), kwargs["levels"], kwargs["decimation"], ps.multiscale.MIN_COARSE_POINTS)
+        problem = keys.layout_problem(mesh, kwargs["levels"] - 1, s.n_bands)
         if problem:
             raise ValueError(problem)
         if s.keep_parts and len(mesh.edges):
             kwargs["edges"] = mesh_io.read_edges(mesh)
+        # Normals orient level 0 (and tell the sides of thin sheets): an imported point cloud's
+        # own, else, for thin sheets, the faces' vertex normals.
+        normals = mesh_io.read_imported_normals(mesh)
+        if normals is None and s.thin_sheets:
+            normals = mesh_io.read_vertex_normals(mesh)
+        if normals is not None:
+            kwargs["normals"] = normals
+        if s.thin_sheets:
+            kwargs["sheets"] = True
+        planes = _mirror_planes(obj, points)
+        op._mirror_note = None
+        if planes is not None:
+            if not hasattr(ps, "Mirror"):
+                raise ValueError("this pointscale engine has no mirror symmetry; turn off Use Mirror Modifier")
+            kwargs["mirror"] = ps.Mirror(planes.axes, planes.origin, planes.seam)
+            op._mirror_note = f"symmetric about {planes.describe()}"
     except ValueError as exc:
         op.report({"ERROR"}, f"Decompose '{obj.name}': {exc}")
         return None
@@ -93,6 +136,10 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
             self.report({"INFO"}, f"Decompose '{obj.name}': the earlier results are kept as {', '.join(kept)}")
         for message in layout.warnings:
             self.report({"WARNING"}, f"Decompose '{obj.name}': {message}")
+        if getattr(self, "_levels_note", None):
+            self.report({"WARNING"}, f"Decompose '{obj.name}': {self._levels_note}")
+        if getattr(self, "_mirror_note", None):
+            self.report({"INFO"}, f"Decompose '{obj.name}': {self._mirror_note}")
         self.report({"INFO"}, f"Decomposed '{obj.name}': {n} vertices, {k + 1} levels, {k} bands")
         return {"FINISHED"}
 

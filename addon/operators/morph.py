@@ -65,7 +65,7 @@ class POINTSCALE_OT_morph(bpy.types.Operator):
         b = _world_points(b_obj, a_obj)
         base = _world_points(s.morph_base_object, a_obj) if s.morph_base == "OBJECT" else None
         try:
-            p0, pa, pb = compute.morph_keys(engine.get(), a, b, base, s.morph_samples)
+            p0, pa, pb, messages = compute.morph_keys(engine.get(), a, b, base, s.morph_samples, s.morph_align)
         except ValueError as exc:
             self.report({"ERROR"}, f"Morph: {exc}")
             return {"CANCELLED"}
@@ -99,6 +99,8 @@ class POINTSCALE_OT_morph(bpy.types.Operator):
             o.select_set(False)
         obj.select_set(True)
         context.view_layer.objects.active = obj
+        for message in messages:
+            self.report({"WARNING"}, f"Morph: {message}")
         self.report({"INFO"}, f"Morph '{obj.name}': set 'A detail' (alpha) and 'B detail' (beta) to blend")
         return {"FINISHED"}
 

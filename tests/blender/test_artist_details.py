@@ -34,7 +34,10 @@ def test_clear_keeps_the_artists_own_keys_and_painted_masks(capfd):
     obj.shape_key_add(name="Basis")
     obj.shape_key_add(name="Smile")
     h.decompose(obj, levels=3)
-    obj.vertex_groups["Band 1 mask"].add([0, 1, 2], 0.25, "REPLACE")  # painted
+    for band in (0, 1):  # both masks made, as the brush button makes them; only band 1 painted
+        assert bpy.ops.pointscale.paint_band_mask(band=band) == {"FINISHED"}
+    bpy.ops.object.mode_set(mode="OBJECT")
+    obj.vertex_groups["Band 1 mask"].add([0, 1, 2], 0.25, "REPLACE")
     assert bpy.ops.pointscale.clear() == {"FINISHED"}
     assert [k.name for k in obj.data.shape_keys.key_blocks] == ["Basis", "Smile"]
     assert [g.name for g in obj.vertex_groups] == ["Band 1 mask"]
@@ -78,3 +81,35 @@ def test_rebuild_detail_and_bake_filter_return_to_the_artists_mode(mode):
     assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
     assert obj.mode == mode
     bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def test_suzanne_is_decomposed_with_the_levels_she_supports(capfd):
+    bpy.ops.mesh.primitive_monkey_add()
+    obj = bpy.context.active_object
+    assert len(obj.data.vertices) == 507
+    h.decompose(obj, levels=4)
+    assert obj.data.multiscale.n_bands == 2  # 3 levels
+    assert obj.data.multiscale.levels == 4  # the artist's setting stays
+    out = capfd.readouterr().out
+    assert "507 vertices" in out and "Subdivision Surface" in out and "Decimation to 0.26" in out
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_imported_point_cloud_normals_orient_the_levels(tmp_path, sign):
+    """A PLY point cloud's normals (Blender's importer keeps them as the `normal` attribute) say
+    which side is out: inward ones turn every level's normals inward."""
+    import importlib
+
+    import pointscale as ps
+    writeback = importlib.import_module(h.ADDON_NAME + ".writeback")
+    points = ps.shapes.bumpy_sphere(6000, seed=4)
+    normals = sign * points / np.linalg.norm(points, axis=1, keepdims=True)
+    ps.io.write(tmp_path / "cloud.ply", ps.io.Scan(points=points, normals=normals))
+    bpy.ops.wm.ply_import(filepath=str(tmp_path / "cloud.ply"))
+    obj = bpy.context.active_object
+    assert obj.data.attributes.get("normal") is not None
+    h.decompose(obj, levels=3)
+    dec = writeback.decomposition(obj.data, ps)
+    level0 = dec.normals(0)
+    outward = np.einsum("ij,ij->i", level0, dec.level(0)) > 0
+    assert outward.mean() == (1.0 if sign > 0 else 0.0), outward.mean()

@@ -41,9 +41,12 @@ class _StandIn:
     """Eq. 22 on top of pointscale.project: project both onto the base, carry B's detail by
     nearest neighbour onto A's samples."""
 
-    def __init__(self, a, b, base):
+    def __init__(self, a, b, base=None, **_options):
         import pointscale as ps
 
+        if base is None:
+            base = ps.ellipsoid_base(a, b)
+        self.report = {"overlap": 1.0}
         self.p, self.n = ps.project(a, base)
         self.n *= np.sign(((self.p - self.p.mean(axis=0)) * self.n).sum(axis=1))[:, None]
         self.da = ((a - self.p) * self.n).sum(axis=1)
@@ -103,3 +106,24 @@ def test_morph_with_the_engine():
         pytest.skip("pointscale.morph is not in the engine yet (engine-breadth issue)")
     A, B, a, b = _two_models()
     _check_morph(A, B, a, b, b_tolerance=0.01)
+
+
+def test_a_target_moved_away_is_reported_and_aligned_on_request(capfd):
+    """B three units from A: Align None says they barely overlap; Align Bounding Box lands on B."""
+    A, B, a, b = _two_models()
+    B.location = (3.0, 0.0, 0.0)
+    bpy.context.view_layer.update()
+    b_world = b + np.array([3.0, 0.0, 0.0])
+    A.data.multiscale.morph_target = B
+    assert bpy.ops.pointscale.morph() == {"FINISHED"}
+    assert "barely overlap" in capfd.readouterr().out
+    A_again = bpy.data.objects["A"]
+    bpy.context.view_layer.objects.active = A_again
+    A_again.data.multiscale.morph_align = "BBOX"
+    assert bpy.ops.pointscale.morph() == {"FINISHED"}
+    assert "barely overlap" not in capfd.readouterr().out
+    M = bpy.context.active_object
+    kbs = M.data.shape_keys.key_blocks
+    kbs["A detail"].value, kbs["B detail"].value = 0.0, 1.0
+    near_b = _distance_to_surface(h.evaluated(M), b_world)
+    assert np.percentile(near_b, 99) <= 0.01 * diagonal(b), np.percentile(near_b, 99) / diagonal(b)

@@ -49,7 +49,8 @@ class Morph:
         return finite_result(out, "the morph")
 
 
-def morph(points_a, points_b, base_points=None, *, align: str = "none", base_normals=None, kernel: float = 1.0,
+def morph(points_a, points_b, base_points=None, *, align: str = "none", base_samples: int = 20000,
+          base_normals=None, kernel: float = 1.0,
           neighbors: int = 24, interpolation_neighbors: int = 8, tolerance: float = 1e-9, max_iterations: int = 50,
           threads: int = 0, progress=None, faces_a=None, edges_a=None, faces_b=None, edges_b=None) -> Morph:
     """Morph between two models through a common base surface (Sec. 8.3, Eq. 22).
@@ -57,7 +58,7 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_nor
     points_a, points_b  (n_a, 3), (n_b, 3); the counts may differ. They must overlap: a warning
                         says when their bounding boxes share less than OVERLAP_WARNING.
     base_points         samples of a base close to both, e.g. ellipsoid_base(points_a, points_b);
-                        None takes that ellipsoid (of A and the aligned B)
+                        None takes that ellipsoid (of A and the aligned B), base_samples points
     align               "none", or how to carry B onto A first (pointscale.alignment): "bbox"
                         (bounding boxes), "pca" (principal axes) or "icp" (principal axes, then
                         iterative closest points). The morph is then computed on the aligned B,
@@ -79,7 +80,7 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_nor
         b, placement = carry.apply(b), carry.inverse()
     if base_points is None:
         from .operators import ellipsoid_base
-        base_points = ellipsoid_base(a, b)
+        base_points = ellipsoid_base(a, b, n=base_samples)
     share = overlap(a, b)
     if share < OVERLAP_WARNING:
         warnings.warn(f"A and B barely overlap (their bounding boxes share {share:.0%}), so the base lies far from "
