@@ -48,27 +48,22 @@ def test_bent_plate_keeps_its_thickness_at_every_level():
                 assert thickness.max() < 0.5, (l, thickness.max())
 
 
-@pytest.mark.parametrize("size, spacing", [((2.0, 1.6, 1.2), 0.02), ((1.2, 1.2, 0.8), 0.015)])
+@pytest.mark.parametrize("size, spacing", [((2.0, 2.0, 2.0), 0.02), ((1.2, 1.2, 0.8), 0.01)])
 def test_thin_walled_box_keeps_both_walls(size, spacing):
-    """Away from the edges (which every level rounds, one wall or two), each wall stays where that
-    wall alone would be, within a tenth of the gap."""
+    """Each wall of a closed box one spacing thick stays where it is at every level, within a tenth
+    of the gap, on its faces three level-0 kernels from the edges (which every level rounds, one
+    wall or two). Measured 0.012-0.017 of the gap at level 0 and 0 at the others."""
     points, normals, outer = thin_walled_box(size, spacing=spacing)
     gap = spacing
     dec = ps.decompose(points, 4, normals=normals, sheets=True)
     h0 = dec.stats[0]["kernel_width"]
-    half = np.asarray(size) / 2
-    # points at least two level-0 kernels from every edge of their face
-    slack = np.sort(half - np.abs(points), axis=1)[:, 1]
-    face = slack > 2 * h0
-    assert face.sum() > 0.1 * len(points)
+    slack = np.sort(np.asarray(size) / 2 - np.abs(points), axis=1)[:, 1]  # to the nearest edge of its face
+    face = slack > 3 * h0
+    assert face[outer].mean() > 0.3 and face[~outer].mean() > 0.3
     kept = side_drift(dec, points, normals, face)
-    alone = np.maximum(side_drift(ps.decompose(points[outer], 4, normals=normals[outer]), points[outer],
-                                  normals[outer], face[outer]),
-                       side_drift(ps.decompose(points[~outer], 4, normals=normals[~outer]), points[~outer],
-                                  normals[~outer], face[~outer]))
-    assert np.all(kept <= alone + 0.1 * gap), (kept / gap, alone / gap)
+    assert kept.max() < 0.1 * gap, kept / gap
     merged = side_drift(ps.decompose(points, 4, normals=normals), points, normals, face)
-    assert merged[1:-1].min() > 0.3 * gap, merged / gap
+    assert merged[:-1].min() > 0.3 * gap, merged / gap
 
 
 def test_sheets_keep_the_round_trip_exact_and_follow_an_edit(tmp_path):
