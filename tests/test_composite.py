@@ -89,7 +89,11 @@ def test_the_small_eye_keeps_its_shape_and_is_named(model):
     diagonal = np.linalg.norm(np.ptp(eye, axis=0))
     assert np.linalg.norm(dec.level(0)[part == "eye"] - eye, axis=1).max() < 0.10 * diagonal
     first_eye_vertex = int(np.flatnonzero(part == "eye")[0])
-    assert any(f"from vertex {first_eye_vertex}" in m for m in messages), messages
+    assert any(f"from vertex {first_eye_vertex}, around" in m for m in messages), messages
+    # its reflection is named by the same vertex of the half, said to be mirrored
+    assert any(f"from vertex {first_eye_vertex}, mirrored" in m for m in messages), messages
+    eyes = [r for r in dec.parts if r["first_vertex"] == first_eye_vertex]
+    assert sorted(r["mirrored"] for r in eyes) == [False, True]
 
 
 def ear_drift(dec, points, normals, part):

@@ -19,6 +19,8 @@ would merge it with its reflection.
 from __future__ import annotations
 
 import json
+import re
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -182,6 +184,17 @@ class Symmetry:
             out = np.minimum(out, out[across])
         return out[: self.n]
 
+    def in_half_numbers(self, message: str) -> str:
+        """A message about the whole model with each "from vertex N" said as the half's vertex
+        (and whether the part is a reflection)."""
+        def vertex(match):
+            j = int(match.group(1))
+            if j >= self.n_full:
+                return match.group(0)
+            mirrored = ", mirrored" if self.element[j] else ""
+            return f"from vertex {int(self.source[j])}{mirrored}"
+        return re.sub(r"from vertex (\d+)", vertex, message)
+
     # ---- saving
     def settings(self) -> dict:
         m = self.mirror
@@ -231,8 +244,15 @@ def decompose_mirrored(points, mirror, normals=None, faces=None, edges=None, **o
     # Connectivity as vertex pairs: that is all that parts read, and pairs mirror simply. A part
     # that crosses a plane stays one part with its reflection.
     pairs = connectivity_pairs(len(p), faces, edges)
-    dec = decompose(symmetry.full(half), normals=None if n_arr is None else symmetry.full_vectors(n_arr),
-                    edges=None if pairs is None else symmetry.full_pairs(pairs), **options)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        dec = decompose(symmetry.full(half), normals=None if n_arr is None else symmetry.full_vectors(n_arr),
+                        edges=None if pairs is None else symmetry.full_pairs(pairs), **options)
+    for w in caught:  # the whole model's vertex numbers, said as the half's
+        warnings.warn(symmetry.in_half_numbers(str(w.message)), w.category, stacklevel=3)
+    for report in dec.settings.get("parts") or ():
+        first = report["first_vertex"]
+        report["first_vertex"], report["mirrored"] = int(symmetry.source[first]), bool(symmetry.element[first])
     dec._mirror = symmetry
     dec.settings["mirror"] = symmetry.settings()
     missed = dec._cache.get("rays_missed_points")
