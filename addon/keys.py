@@ -1,7 +1,7 @@
 """The shape-key layout that a decompose leaves on a mesh.
 
 ``Basis`` (never written), ``Level 0..k-1`` (absolute P^l), ``Band 0..k-1``
-(Basis + P^{l+1} - P^l, value = gain - 1, masked by ``Band l mask``),
+(Basis + P^{l+1} - P^l, value = gain - 1, masked by ``Band l mask`` once it is painted),
 ``Multiscale Edit`` (Rebuild detail) and ``Multiscale Filter`` (Bake filter).
 """
 
@@ -114,7 +114,9 @@ def remove_key(obj, name: str) -> None:
 
 
 def ensure_mask(obj, l: int):
-    """The vertex group ``Band l mask``; a new one starts at weight 1 everywhere (full band)."""
+    """The vertex group ``Band l mask``; a new one starts at weight 1 everywhere (full band).
+    Made when the artist first paints the band (0.5 s at 1M vertices), not by Decompose: a band
+    key without a vertex group applies fully, as a full mask does."""
     name = mask_name(l)
     vg = obj.vertex_groups.get(name)
     if vg is None:
@@ -138,22 +140,23 @@ def show_folds(obj, mask: np.ndarray) -> None:
         vg.add(folded, 1.0, "REPLACE")
 
 
-def write_layout(obj, basis: np.ndarray, levels: np.ndarray, old_k: int) -> list:
-    """Level and Band keys and masks for k = len(levels). Removes the stale keys this add-on
-    made, keeps the last Multiscale Edit / Filter as "... (previous)", and keeps the active key.
-    Returns the names of the keys it kept that way."""
+def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int) -> list:
+    """Level and Band keys for k = len(levels) (``bands``: logic.band_key_data). Removes the
+    stale keys this add-on made, keeps the last Multiscale Edit / Filter as "... (previous)",
+    and keeps the active key. Returns the names of the keys it kept that way."""
     mesh = obj.data
     mine = owned(mesh, old_k)
     active = obj.active_shape_key.name if obj.active_shape_key is not None else None
     k = levels.shape[0]
-    bands = logic.band_key_data(basis, levels)
     layout = [level_name(l) for l in range(k)] + [band_name(l) for l in range(k)]
     for l in range(k):
         ensure_key(obj, level_name(l), levels[l]).value = 0.0
     for l in range(k):
         kb = ensure_key(obj, band_name(l), bands[l], slider=(BAND_MIN, BAND_MAX))
         kb.value = 0.0
-        kb.vertex_group = ensure_mask(obj, l).name
+        # A mask painted for an earlier decompose stays in use; a new band has none (see ensure_mask).
+        mask = obj.vertex_groups.get(mask_name(l))
+        kb.vertex_group = mask.name if mask is not None else ""
     for name in sorted(mine - set(layout) - {EDIT, FILTER}):
         remove_key(obj, name)
     kept = []

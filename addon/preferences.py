@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import bpy
-from bpy.props import FloatProperty, IntProperty
+from bpy.props import BoolProperty, FloatProperty, IntProperty
 
 PACKAGE = __package__
 
@@ -22,10 +22,18 @@ class MULTISCALE_AP_preferences(bpy.types.AddonPreferences):
         max=2.0,
     )
 
+    normal_attributes: BoolProperty(
+        name="Level Normal Attributes",
+        description="Decompose also writes each level's normals as the attributes ms_normal_<l>, for shaders "
+        "and Geometry Nodes (12 bytes a vertex per band in memory and in the .blend)",
+        default=False,
+    )
+
     def draw(self, context):
         col = self.layout.column()
         col.prop(self, "threads")
         col.prop(self, "poll_interval")
+        col.prop(self, "normal_attributes")
 
 
 def get(context=None):
@@ -40,6 +48,7 @@ def get(context=None):
 class _Defaults:
     threads = 0
     poll_interval = 0.1
+    normal_attributes = False
 
 
 CLASSES = [MULTISCALE_AP_preferences]

@@ -3,27 +3,55 @@
 from __future__ import annotations
 
 import uuid
+from dataclasses import dataclass
 
 import numpy as np
 
-from . import keys, mesh_io, storage
+from . import group_weights, keys, logic, mesh_io, preferences, recipe, storage
 
 _cache: dict = {}
 
 
-def apply_layout(obj, layout, basis=None) -> list:
-    """Keys, masks, attributes and settings of a fresh decomposition (object mode). Returns the
-    earlier result keys it kept under a "(previous)" name."""
+@dataclass
+class KeyData:
+    """The key arrays as Blender stores them (float32), made off the main thread."""
+
+    levels: np.ndarray  # (k, n, 3) Level keys
+    bands: np.ndarray  # (k, n, 3) Band keys
+    recipe: dict | None  # see recipe.py; None: store the whole model
+    sheet_normals: np.ndarray | None = None  # the vertex normals Keep Thin Sheets Apart gave the engine
+
+
+def key_data(layout, basis, kwargs=None, version="") -> KeyData:
+    """NumPy only, safe in the worker thread: at 1M vertices this is 0.3-0.7 s that the modal
+    Decompose would otherwise block the UI for."""
+    basis = np.asarray(basis, dtype=np.float64)
+    bands = logic.band_key_data(basis, layout.levels).astype(np.float32)
+    made = recipe.make(kwargs, basis, version) if kwargs is not None else None
+    sheet_normals = (kwargs or {}).get("normals")
+    return KeyData(layout.levels.astype(np.float32), bands, made,
+                   None if sheet_normals is None else np.asarray(sheet_normals, dtype=np.float32))
+
+
+def apply_layout(obj, layout, basis=None, kwargs=None, version="", data=None) -> list:
+    """Keys, attributes and settings of a fresh decomposition (object mode). ``kwargs``: what
+    the engine was given (then the .blend keeps only the recipe, see storage.py); ``data``:
+    key_data() made beforehand. Returns the earlier result keys it kept under a "(previous)" name."""
     mesh = obj.data
     settings = mesh.multiscale
     # The Basis the decomposition was computed from (the caller's snapshot), else the current one.
-    basis = (mesh_io.read_basis(mesh) if basis is None else np.asarray(basis)).astype(np.float64)
+    basis = mesh_io.read_basis(mesh) if basis is None else basis
+    data = key_data(layout, basis, kwargs, version) if data is None else data
+    made = data.recipe
+    normals = layout.normals if preferences.get().normal_attributes else None
     try:
-        storage.store(mesh, layout.dec, normals=layout.normals)
+        storage.store(mesh, layout.dec, normals=normals, recipe=made,
+                      sheet_normals=data.sheet_normals)
     except Exception:
         storage.clear(mesh)  # never leave half-written data
         raise
-    kept = keys.write_layout(obj, basis, layout.levels, settings.n_bands)
+    kept = keys.write_layout(obj, data.levels, data.bands, settings.n_bands)
+    release_levels(layout.dec)
     token = uuid.uuid4().hex
     mesh[storage.PROP]["token"] = token
     _remember(mesh, token, layout.dec)
@@ -57,7 +85,7 @@ def clear(obj) -> list:
     if folds is not None:
         obj.vertex_groups.remove(folds)
     masks = [keys.mask_name(l) for l in range(k) if obj.vertex_groups.get(keys.mask_name(l)) is not None]
-    weights = mesh_io.read_group_weights(obj, masks, len(mesh.vertices)) if masks else []
+    weights = group_weights.read(obj, masks, len(mesh.vertices)) if masks else []
     painted = []
     for name, w in zip(masks, weights):
         if w is not None and np.all(w == 1.0):
@@ -102,13 +130,21 @@ def restore_colors(mesh) -> None:
     del mesh[SHOWN_COLORS]
 
 
+def release_levels(dec) -> None:
+    """Drops the levels and normals the engine object cached for the keys (about 170 bytes a
+    vertex at 3 bands): the keys hold them now, and reconstruct does not read the cache."""
+    for name in ("levels", "normals"):
+        dec._cache.pop(name, None)
+
+
 def decomposition(mesh, ps):
-    """The engine object for ``mesh``, rebuilt from its attributes at most once per token."""
+    """The engine object for ``mesh``, rebuilt at most once per token: from the saved model
+    (format 1), or by decomposing the Basis again (format 2, as long as the engine takes)."""
     token = mesh[storage.PROP].get("token", "") if storage.has_data(mesh) else ""
     key = (mesh.session_uid, token)
     dec = _cache.get(key)
     if dec is None:
-        dec = storage.load(mesh, ps)
+        dec = storage.load(mesh, ps, threads=preferences.get().threads)
         _remember(mesh, token, dec)
     return dec
 

@@ -90,6 +90,14 @@ def _prepare(op, context):
     return points, kwargs
 
 
+def _computed(ps, points, kwargs, progress=None):
+    """Everything but the bpy writes, in the worker thread under the modal: the engine, then the
+    keys' float32 arrays and the recipe (the Basis the engine saw and its settings, which the
+    .blend keeps to decompose again)."""
+    layout = compute.decompose(ps, points, progress=progress, **kwargs)
+    return layout, writeback.key_data(layout, points, kwargs, getattr(ps, "__version__", ""))
+
+
 class POINTSCALE_OT_decompose(bpy.types.Operator):
     """Split the mesh into a smooth base and detail bands (Level and Band shape keys).
     The Basis is read, never modified; faces are kept but not used"""
@@ -116,13 +124,14 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         try:
             # No progress callback: the engine may call it from its own threads,
             # and bpy must only be touched from the main thread.
-            layout = compute.decompose(engine.get(), points, **kwargs)
+            result = _computed(engine.get(), points, kwargs)
         except ValueError as exc:
             self.report({"ERROR"}, f"Decompose '{obj.name}': {exc}")
             return {"CANCELLED"}
-        return self._finish(context, obj, layout, points)
+        return self._finish(context, obj, result, points)
 
-    def _finish(self, context, obj, layout, points):
+    def _finish(self, context, obj, result, points):
+        layout, data = result
         n = len(points)
         if obj.type != "MESH" or len(obj.data.vertices) != n:
             self.report({"ERROR"}, f"'{obj.name}' changed while it was being decomposed; nothing was written")
@@ -130,7 +139,7 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         if obj.mode != "OBJECT":
             # Edit, Sculpt or Weight Paint on a key that is about to change: leave it first.
             bpy.ops.object.mode_set(mode="OBJECT")
-        kept = writeback.apply_layout(obj, layout, basis=points)  # the Basis the engine saw
+        kept = writeback.apply_layout(obj, layout, basis=points, data=data)
         k = layout.k
         if kept:
             self.report({"INFO"}, f"Decompose '{obj.name}': the earlier results are kept as {', '.join(kept)}")
@@ -157,7 +166,7 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         self._n = len(points)
         ps = engine.get()
         self._job = Job(
-            lambda progress: compute.decompose(ps, points, progress=progress, **kwargs),
+            lambda progress: _computed(ps, points, kwargs, progress),
             cancelled_type=engine.cancelled_type(),
             name="pointscale-decompose",
         )
@@ -193,7 +202,10 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         if obj is None:
             self.report({"ERROR"}, f"'{self._obj_name}' disappeared while it was being decomposed")
             return {"CANCELLED"}
-        return self._finish(context, obj, job.result, self._points)
+        # Blender keeps the finished operator (redo, the Info log): let it keep no arrays.
+        result, points = job.result, self._points
+        self._job = self._points = None  # the job's closure holds the points and edges too
+        return self._finish(context, obj, result, points)
 
     def cancel(self, context):
         # Blender ends the modal itself (file load, quit): stop the worker, drop the result.

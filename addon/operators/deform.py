@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import bpy
 
-from .. import compute, engine, keys, mesh_io, writeback
+from .. import compute, engine, group_weights, keys, mesh_io, writeback
 from ._common import DecomposedOperator
 
 
@@ -104,7 +104,7 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
             dec = writeback.decomposition(mesh, ps)
             base = mesh_io.read_key(keys.get(mesh, keys.level_name(0)))
             values = keys.band_values(mesh, k)
-            weights = mesh_io.read_group_weights(obj, keys.band_masks(obj, k), len(mesh.vertices))
+            weights = group_weights.read(obj, keys.band_masks(obj, k), len(mesh.vertices))
             result, folds = compute.bake(ps, dec, base, values, weights, prevent_folds=mesh.multiscale.prevent_folds)
         except ValueError as exc:
             self.report({"ERROR"}, f"Bake filter: {exc}")

@@ -133,6 +133,8 @@ def test_a_morph_of_a_decomposed_object_carries_none_of_its_decomposition():
     b = ps.shapes.bumpy_sphere(2200, coarse=0.08, coarse_frequency=5.0, fine=0.0, seed=1)
     A = h.mesh_object(a, name="A")
     h.decompose(A, levels=3)
+    for band in (0, 1):  # masks are made when painted: make them, so that the morph could copy them
+        assert bpy.ops.pointscale.paint_band_mask(band=band, enter_paint=False) == {"FINISHED"}
     B = h.mesh_object(b, name="B")
     bpy.context.view_layer.objects.active = A
     A.data.multiscale.morph_target = B

@@ -26,12 +26,15 @@ def test_decompose_creates_keys_masks_attributes(sphere):
     assert names == ["Basis", "Level 0", "Level 1", "Level 2", "Band 0", "Band 1", "Band 2"]
     for l in range(3):
         kb = me.shape_keys.key_blocks[f"Band {l}"]
-        assert kb.vertex_group == f"Band {l} mask"
-        assert obj.vertex_groups.get(f"Band {l} mask") is not None
+        # No mask until the band is painted (a key without a group applies fully), no normals
+        # unless the Level Normal Attributes preference asks for them: both cost .blend size.
+        assert kb.vertex_group == "" and obj.vertex_groups.get(f"Band {l} mask") is None
         assert kb.relative_key.name == "Basis" and kb.value == 0.0 and kb.slider_min == -1.0
         assert me.attributes.get(f"ms_detail_{l}") is not None
-        assert me.attributes.get(f"ms_normal_{l}").data_type == "FLOAT_VECTOR"
-    assert any(a.name.startswith(".ps.") for a in me.attributes)
+        assert me.attributes.get(f"ms_normal_{l}") is None
+    # The .blend keeps the recipe, not the engine model: only the vertex order column is hidden.
+    assert [a.name for a in me.attributes if a.name.startswith(".ps.")] == [".ps.order"]
+    assert me["pointscale"]["format"] == 2 and "recipe" in me["pointscale"]
     assert me.multiscale.n_vertices == 4000 and me.multiscale.n_bands == 3
     assert me.multiscale.scale == 3.0
     # Basis bit-identical, vertex positions too
