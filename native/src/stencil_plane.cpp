@@ -5,6 +5,7 @@
 
 #include "pointscale/fast_exp.h"
 #include "pointscale/plane_fit.h"
+#include "pointscale/portable.h"
 #include "pointscale/simd_clones.h"
 
 namespace pointscale {
@@ -68,7 +69,7 @@ inline void covariance_from_sums(double sw, double sx, double sy, double sz, dou
 // AVX2 ones; each lane's arithmetic is the same either way. With L = 1 (the rest of a cluster,
 // and clusters with a single query, as in the consistency iteration) lanes are neighbours.
 template <int L>
-__attribute__((always_inline)) inline void covariances_of_group(PlaneStencil& stencil, const double* queries, int first,
+POINTSCALE_ALWAYS_INLINE void covariances_of_group(PlaneStencil& stencil, const double* queries, int first,
                                                                 double weight_floor, double* cov, double* trace,
                                                                 double* valid) {
   const int k = stencil.size;

@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "pointscale/plane_fit.h"
+#include "pointscale/portable.h"
 
 namespace pointscale {
 
@@ -17,7 +18,7 @@ constexpr int eigen_lanes = 16;
 // Writes unit normals to normal[0..2][lane] and ok[lane] (0: no plane, as in
 // smallest_eigenvector's zero vector, or an unused lane; 1 otherwise).
 // Always inlined, so that it is compiled for the caller's SIMD target (simd_clones.h).
-__attribute__((always_inline)) inline void batched_smallest_eigenvectors(const double (&cov)[6][eigen_lanes], const double (&trace)[eigen_lanes],
+POINTSCALE_ALWAYS_INLINE void batched_smallest_eigenvectors(const double (&cov)[6][eigen_lanes], const double (&trace)[eigen_lanes],
                                           const double (&used)[eigen_lanes], double (&normal)[3][eigen_lanes],
                                           double (&ok)[eigen_lanes]) {
   // Written lane by lane with named scalars and selects only, so that the lane loops vectorise.
@@ -68,7 +69,7 @@ __attribute__((always_inline)) inline void batched_smallest_eigenvectors(const d
       a5[l] = frozen ? yz : c5;
       // As dominant_by_squaring: one squaring after the test passes, then frozen.
       const bool passed = tr * tr - norm2 <= detail::rank_one_test * tr * tr;
-      done[l] = frozen | (last[l] != 0.0) ? 1.0 : 0.0;
+      done[l] = (frozen | (last[l] != 0.0)) ? 1.0 : 0.0;
       last[l] = passed ? 1.0 : 0.0;
     }
     bool all_done = true;

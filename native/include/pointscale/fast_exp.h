@@ -4,6 +4,8 @@
 #pragma once
 #include <cstdint>
 
+#include "pointscale/portable.h"
+
 namespace pointscale {
 
 inline double exp_nonpositive(double x) {
@@ -21,10 +23,10 @@ inline double exp_nonpositive(double x) {
                    2.00000000000000000009e0;
   const double e = 1.0 + 2.0 * p / (q - p);
   // Multiply by 2^k by adding k to the exponent field; k >= -1010 keeps the result normal.
-  const std::int64_t kbits = __builtin_bit_cast(std::int64_t, kd);
-  const std::int64_t ebits = __builtin_bit_cast(std::int64_t, e);
+  const std::int64_t kbits = bit_cast<std::int64_t>(kd);
+  const std::int64_t ebits = bit_cast<std::int64_t>(e);
   constexpr std::int64_t shifter_bits = 0x4338000000000000LL;
-  return __builtin_bit_cast(double, ebits + ((kbits - shifter_bits) << 52));
+  return bit_cast<double>(ebits + ((kbits - shifter_bits) << 52));
 }
 
 }  // namespace pointscale

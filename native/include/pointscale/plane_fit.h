@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "pointscale/portable.h"
 #include "pointscale/types.h"
 
 namespace pointscale {
@@ -41,8 +42,8 @@ inline void floored_gaussian_weights(const double* d2, const double* inv_h2, int
 
 // 2^-e for x = m 2^e with m in [1, 2): an exact rescaling to [1, 2). x must be positive and normal.
 inline double inverse_power_of_two(double x) {
-  const std::uint64_t exponent = (__builtin_bit_cast(std::uint64_t, x) >> 52) & 0x7ff;
-  return __builtin_bit_cast(double, (std::uint64_t(2046) - exponent) << 52);
+  const std::uint64_t exponent = (bit_cast<std::uint64_t>(x) >> 52) & 0x7ff;
+  return bit_cast<double>((std::uint64_t(2046) - exponent) << 52);
 }
 
 namespace detail {
