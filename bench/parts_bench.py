@@ -9,23 +9,14 @@ order). Times are medians of --repeat runs in this process, levels=4 and the def
 from __future__ import annotations
 
 import argparse
-import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 
 import pointscale as ps
+from median_time import median_time
 from pointscale import meshes
-
-
-def median_time(call, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - t)
-    return float(np.median(times))
 
 
 def hair_cards(count: int = 2000, seed: int = 0):

@@ -60,13 +60,13 @@ def as_points(points, name: str = "points", min_count: int = 1) -> np.ndarray:
     return a
 
 
-def as_normals_of(normals, points: np.ndarray, name: str = "normals"):
+def as_normals_of(normals, points: np.ndarray, name: str = "normals", points_name: str = "points"):
     """Optional per-point normals: None, or a checked (n, 3) array of the shape of points."""
     if normals is None:
         return None
     n = as_points(normals, name)
     if n.shape != points.shape:
-        raise ValueError(f"{name} must have the shape of points {points.shape}, got {n.shape}")
+        raise ValueError(f"{name} must have the shape of {points_name} {points.shape}, got {n.shape}")
     return n
 
 

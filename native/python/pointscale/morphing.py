@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _core
-from ._checks import (MAX_GAIN, MAX_ITERATIONS, MAX_NEIGHBORS, as_callback, as_points, centre, finite_result,
-                      kernel_option, positive, require_near, require_surface, set_threads)
+from ._checks import (MAX_GAIN, MAX_ITERATIONS, MAX_NEIGHBORS, as_callback, as_normals_of, as_points, centre,
+                      finite_result, kernel_option, positive, require_near, require_surface, set_threads)
 from .multiscale import MIN_COARSE_POINTS
 
 #: Below this overlap of A's and B's bounding boxes (intersection over union) morph warns:
@@ -115,11 +115,7 @@ def _morph_where_they_lie(a, b, base_points, *, base_normals, kernel, neighbors,
     k = positive(interpolation_neighbors, "interpolation_neighbors", integer=True, maximum=MAX_NEIGHBORS)
     tolerance = positive(tolerance, "tolerance")
     max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
-    bn = None
-    if base_normals is not None:
-        bn = as_points(base_normals, "base_normals")
-        if bn.shape != s.shape:
-            raise ValueError(f"base_normals must have the shape of base_points {s.shape}, got {bn.shape}")
+    bn = as_normals_of(base_normals, s, "base_normals", "base_points")
     origin = centre(np.vstack([a, b, s]))
     set_threads(threads)
     r = _core.morph(a - origin, b - origin, s - origin, bn, kernel, neighbors, tolerance, max_iterations, k,

@@ -124,11 +124,8 @@ def project_sheets(points, onto, *, kernel: float = 1.0, sheet: float = 0.2, ont
         raise ValueError(f"sheet must be in [0.001, 1] (a fraction of the kernel width), got {sheet}")
     tolerance = positive(tolerance, "tolerance")
     max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
-    nrm = None
-    if onto_normals is not None:
-        nrm = as_points(onto_normals, "onto_normals")
-        if nrm.shape != s.shape:
-            raise ValueError(f"onto_normals must have the shape of onto {s.shape}, got {nrm.shape}")
+    nrm = as_normals_of(onto_normals, s, "onto_normals", "onto")
+    if nrm is not None:
         if not (np.linalg.norm(nrm, axis=1) > 0).all():
             raise ValueError("onto_normals contains zero vectors")
         nrm = nrm / np.linalg.norm(nrm, axis=1)[:, None]
@@ -215,11 +212,7 @@ def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neigh
     tolerance = positive(tolerance, "tolerance")
     max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
     max_variation = positive(max_variation, "max_variation")
-    bn = None
-    if base_normals is not None:
-        bn = as_points(base_normals, "base_normals")
-        if bn.shape != b.shape:
-            raise ValueError(f"base_normals must have the shape of base_points {b.shape}, got {bn.shape}")
+    bn = as_normals_of(base_normals, b, "base_normals", "base_points")
     origin = centre(np.vstack([p, b]))
     set_threads(threads)
     model = _core.encode(p - origin, b - origin, bn, kernel, neighbors, tolerance, max_iterations, max_variation,
