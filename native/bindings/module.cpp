@@ -314,7 +314,13 @@ PYBIND11_MODULE(_core, m) {
   py::class_<FoldReference>(m, "FoldReference", "What a model's folds are measured against (folds.h).")
       .def_property_readonly("exempting", [](const FoldReference& r) { return !r.exempt.empty(); })
       .def_property_readonly("rings", [](const FoldReference& r) {
-        return to_array(r.rings, {static_cast<py::ssize_t>(r.other_sheet.size()), r.ring_size});
+        // Point by point, as point indices (the reference keeps them by slot).
+        const std::size_t n = r.other_sheet.size(), w = static_cast<std::size_t>(r.ring_size);
+        IndexList rings(n * w);
+        for (std::size_t i = 0; i < n; ++i)
+          for (std::size_t m = 0; m < w; ++m)
+            rings[i * w + m] = r.order[static_cast<std::size_t>(r.rings[static_cast<std::size_t>(r.slot[i]) * w + m])];
+        return to_array(rings, {static_cast<py::ssize_t>(n), r.ring_size});
       });
   m.def("fold_reference", [](const MultiscaleModel& s, py::object input) {
     Points in;

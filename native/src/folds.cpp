@@ -33,24 +33,52 @@ inline void tangents(const Vec3& n, Vec3& t1, Vec3& t2) {
   t2 = Vec3(b, sign + n.y() * n.y() * a, -n.y());
 }
 
-// The FoldKind bits of point i (folds.h has the definitions). skip: ring members left out of
+// The rows of a #P by 3 array by slot: a copy already in slot order (order null), or the
+// array itself in point order, read through the reference's order.
+struct SlotRows {
+  const double* rows;
+  Eigen::Index stride;
+  const Index* order;
+  Vec3 operator()(Index s) const {
+    const double* p = rows + stride * (order ? order[s] : s);
+    return Vec3(p[0], p[1], p[2]);
+  }
+};
+
+SlotRows by_point(const Eigen::Ref<const Points>& a, const FoldReference& ref) {
+  return SlotRows{a.data(), a.outerStride(), ref.order.data()};
+}
+
+// a (in point order) copied into slot order: one pass of scattered reads, so that the tests
+// after it read every ring from the cache.
+Points in_slot_order(const Eigen::Ref<const Points>& a, const FoldReference& ref) {
+  Points out(a.rows(), 3);
+  parallel_for(static_cast<std::size_t>(a.rows()), [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t) out.row(static_cast<Eigen::Index>(t)) = a.row(ref.order[t]);
+  }, {}, 16384);
+  return out;
+}
+
+SlotRows by_slot(const Points& a) { return SlotRows{a.data(), 3, nullptr}; }
+
+// The FoldKind bits of slot s (folds.h has the definitions). skip: ring members left out of
 // both tests; exempt: edges left out of the crossing test, and bit 0 the plane test.
-inline std::uint8_t fold_kind(const MultiscaleModel& model, const FoldReference& ref, std::uint16_t skip, std::uint16_t exempt,
-                              const Points* edited, const Eigen::Ref<const Points>& r, Eigen::Index i) {
-  const Points& base = model.base;
-  const Index* ring = ref.rings.data() + static_cast<std::size_t>(i) * ref.ring_size;
+inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std::uint16_t exempt, const SlotRows* edited,
+                              const SlotRows& r, Index s) {
+  const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
   Vec3 t1, t2;
-  tangents(model.base_normals.row(i).transpose(), t1, t2);
-  const Vec3 bi = base.row(i).transpose();
-  const Vec3 ri = r.row(i).transpose();
+  tangents(ref.normals.row(s).transpose(), t1, t2);
+  const Vec3 bi = ref.base.row(s).transpose();
+  const Vec3 ri = r(s);
+  const Vec3 ei = edited ? (*edited)(s) : Vec3::Zero();
   Vec3 mr0 = Vec3::Zero(), mr1 = Vec3::Zero(), mb0 = Vec3::Zero(), mb1 = Vec3::Zero();
   std::uint8_t kind = fold_none;
   for (int m = 1; m < ref.ring_size; ++m) {
     if ((skip >> m) & 1u) continue;
-    const Eigen::Index j = ring[m];
-    const Vec3 d0 = base.row(j).transpose() - bi;
-    const Vec3 db = edited ? Vec3((edited->row(j) - edited->row(i)).transpose()) : d0;
-    const Vec3 dr = r.row(j).transpose() - ri;
+    const Index j = ring[m];
+    const Vec3 d0 = ref.base.row(j).transpose() - bi;
+    const Vec3 db = edited ? Vec3((*edited)(j) - ei) : d0;
+    const Vec3 dr = r(j) - ri;
     if (reversed(dr, db) && !((exempt >> m) & 1u)) kind |= fold_crossed;
     const double u0 = d0.dot(t1), u1 = d0.dot(t2);
     mr0 += u0 * dr;
@@ -64,14 +92,14 @@ inline std::uint8_t fold_kind(const MultiscaleModel& model, const FoldReference&
 }
 
 // The same, with the edges that fold as bits (bit 0 for the plane): what the input exempts.
-std::uint16_t folding_bits(const MultiscaleModel& model, const FoldReference& ref, std::uint16_t skip, const Eigen::Ref<const Points>& r,
-                           Eigen::Index i) {
-  const Index* ring = ref.rings.data() + static_cast<std::size_t>(i) * ref.ring_size;
-  std::uint16_t bits = fold_kind(model, ref, skip, 0, nullptr, r, i) & fold_turned ? 1u : 0u;
+std::uint16_t folding_bits(const FoldReference& ref, std::uint16_t skip, const SlotRows& r, Index s) {
+  const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
+  std::uint16_t bits = fold_kind(ref, skip, 0, nullptr, r, s) & fold_turned ? 1u : 0u;
+  const Vec3 bi = ref.base.row(s).transpose(), ri = r(s);
   for (int m = 1; m < ref.ring_size; ++m) {
     if ((skip >> m) & 1u) continue;
-    const Vec3 d0 = (model.base.row(ring[m]) - model.base.row(i)).transpose();
-    const Vec3 dr = (r.row(ring[m]) - r.row(i)).transpose();
+    const Vec3 d0 = ref.base.row(ring[m]).transpose() - bi;
+    const Vec3 dr = r(ring[m]) - ri;
     if (reversed(dr, d0)) bits |= static_cast<std::uint16_t>(1u << m);
   }
   return bits;
@@ -83,34 +111,58 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input) 
   static_assert(base_ring_size <= 16, "ring bits are 16 wide");
   const std::size_t n = static_cast<std::size_t>(model.base.rows());
   FoldReference ref;
-  ref.rings = base_rings(model.base, model.parts);
+  ref.order = morton_order(model.base);
+  ref.slot.resize(n);
+  for (std::size_t t = 0; t < n; ++t) ref.slot[static_cast<std::size_t>(ref.order[t])] = static_cast<Index>(t);
   ref.ring_size = ring_size_for(model.base.rows());
+  const std::size_t width = static_cast<std::size_t>(ref.ring_size);
+  {
+    const IndexList rings = base_rings(model.base, model.parts);
+    ref.rings.resize(rings.size());
+    parallel_for(n, [&](std::size_t b, std::size_t e) {
+      for (std::size_t t = b; t < e; ++t) {
+        const Index* ring = rings.data() + static_cast<std::size_t>(ref.order[t]) * width;
+        for (std::size_t m = 0; m < width; ++m) ref.rings[t * width + m] = ref.slot[static_cast<std::size_t>(ring[m])];
+      }
+    }, {}, 16384);
+  }
+  ref.base = in_slot_order(model.base, ref);
+  ref.normals = in_slot_order(model.base_normals, ref);
   ref.other_sheet.assign(n, 0);
-  if (input) ref.exempt.assign(n, 0);
+  Points input_by_slot;
+  if (input) {
+    ref.exempt.assign(n, 0);
+    input_by_slot = in_slot_order(*input, ref);
+  }
+  const SlotRows in = by_slot(input_by_slot);
   parallel_for(n, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
-      const Index* ring = ref.rings.data() + i * static_cast<std::size_t>(ref.ring_size);
-      const Eigen::Index row = static_cast<Eigen::Index>(i);
+    for (std::size_t t = b; t < e; ++t) {
+      const Index* ring = ref.rings.data() + t * width;
+      const Eigen::Index row = static_cast<Eigen::Index>(t);
       std::uint16_t skip = 0;
-      for (int m = 1; m < ref.ring_size; ++m)
-        if (ring[m] == ring[0] || model.base_normals.row(ring[m]).dot(model.base_normals.row(row)) <= 0.0)
+      for (std::size_t m = 1; m < width; ++m)
+        if (ring[m] == ring[0] || ref.normals.row(ring[m]).dot(ref.normals.row(row)) <= 0.0)
           skip |= static_cast<std::uint16_t>(1u << m);
-      ref.other_sheet[i] = skip;
-      if (input) ref.exempt[i] = folding_bits(model, ref, skip, *input, row);
+      ref.other_sheet[t] = skip;
+      if (input) ref.exempt[t] = folding_bits(ref, skip, in, static_cast<Index>(t));
     }
   }, {}, 4096);
-  ref.order = morton_order(model.base);
   // The rings reversed, by a counting sort over the members.
   ref.in_offsets.assign(n + 1, 0);
-  const std::size_t width = static_cast<std::size_t>(ref.ring_size);
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t m = 1; m < width; ++m) ++ref.in_offsets[static_cast<std::size_t>(ref.rings[i * width + m]) + 1];
+  for (std::size_t t = 0; t < n; ++t)
+    for (std::size_t m = 1; m < width; ++m) ++ref.in_offsets[static_cast<std::size_t>(ref.rings[t * width + m]) + 1];
   for (std::size_t j = 0; j < n; ++j) ref.in_offsets[j + 1] += ref.in_offsets[j];
   ref.in_rings.resize(static_cast<std::size_t>(ref.in_offsets[n]));
   std::vector<Index> fill(ref.in_offsets.begin(), ref.in_offsets.end() - 1);
-  for (std::size_t i = 0; i < n; ++i)
+  for (std::size_t t = 0; t < n; ++t)
     for (std::size_t m = 1; m < width; ++m)
-      ref.in_rings[static_cast<std::size_t>(fill[static_cast<std::size_t>(ref.rings[i * width + m])]++)] = static_cast<Index>(i);
+      ref.in_rings[static_cast<std::size_t>(fill[static_cast<std::size_t>(ref.rings[t * width + m])]++)] = static_cast<Index>(t);
+  // Each list by point index, so that the limiter's means add up in the same order whatever the slots.
+  parallel_for(n, [&](std::size_t b, std::size_t e) {
+    for (std::size_t s = b; s < e; ++s)
+      std::sort(ref.in_rings.begin() + ref.in_offsets[s], ref.in_rings.begin() + ref.in_offsets[s + 1],
+                [&](Index x, Index y) { return ref.order[static_cast<std::size_t>(x)] < ref.order[static_cast<std::size_t>(y)]; });
+  }, {}, 16384);
   return ref;
 }
 
@@ -119,23 +171,30 @@ std::size_t find_folds(const MultiscaleModel& model, const FoldReference& ref, c
   const std::size_t n = static_cast<std::size_t>(model.base.rows());
   kind.assign(n, fold_none);
   const bool exempting = !ref.exempt.empty();
-  parallel_for(n, [&](std::size_t b, std::size_t e) {
-    for (std::size_t t = b; t < e; ++t) {
-      const std::size_t i = static_cast<std::size_t>(ref.order[t]);
-      kind[i] = fold_kind(model, ref, ref.other_sheet[i], exempting ? ref.exempt[i] : 0, edited, result,
-                          static_cast<Eigen::Index>(i));
-    }
+  const Points r_by_slot = in_slot_order(result, ref);
+  Points edited_by_slot;
+  if (edited) edited_by_slot = in_slot_order(*edited, ref);
+  const SlotRows r = by_slot(r_by_slot), e = by_slot(edited_by_slot);
+  parallel_for(n, [&](std::size_t b, std::size_t end) {
+    for (std::size_t t = b; t < end; ++t)
+      kind[static_cast<std::size_t>(ref.order[t])] =
+          fold_kind(ref, ref.other_sheet[t], exempting ? ref.exempt[t] : 0, edited ? &e : nullptr, r, static_cast<Index>(t));
   }, {}, 4096);
   return n - static_cast<std::size_t>(std::count(kind.begin(), kind.end(), std::uint8_t(fold_none)));
 }
 
-void find_folds_at(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
+void find_folds_at(const MultiscaleModel&, const FoldReference& ref, const Points* edited,
                    Eigen::Ref<const Points> result, const IndexList& points, std::vector<std::uint8_t>& kind) {
   const bool exempting = !ref.exempt.empty();
-  parallel_for(points.size(), [&](std::size_t b, std::size_t e) {
-    for (std::size_t k = b; k < e; ++k) {
+  const SlotRows r = by_point(result, ref);
+  SlotRows e{nullptr, 3, nullptr};
+  if (edited) e = by_point(*edited, ref);
+  parallel_for(points.size(), [&](std::size_t b, std::size_t end) {
+    for (std::size_t k = b; k < end; ++k) {
       const std::size_t i = static_cast<std::size_t>(points[k]);
-      kind[i] = fold_kind(model, ref, ref.other_sheet[i], exempting ? ref.exempt[i] : 0, edited, result, points[k]);
+      const Index s = ref.slot[i];
+      kind[i] = fold_kind(ref, ref.other_sheet[static_cast<std::size_t>(s)], exempting ? ref.exempt[static_cast<std::size_t>(s)] : 0,
+                          edited ? &e : nullptr, r, s);
     }
   }, {}, 1024);
 }
@@ -153,10 +212,11 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
   // The two-way ring neighbours of i (its ring's members, and the points whose rings hold it):
   // a symmetric neighbourhood, so that widening and averaging spread alike in every direction.
   auto each_neighbour = [&](Index i, auto&& visit) {
-    const Index* ring = ref.rings.data() + static_cast<std::size_t>(i) * width;
-    for (std::size_t m = 1; m < width; ++m) visit(ring[m]);
-    for (Index k = ref.in_offsets[static_cast<std::size_t>(i)]; k < ref.in_offsets[static_cast<std::size_t>(i) + 1]; ++k)
-      visit(ref.in_rings[static_cast<std::size_t>(k)]);
+    const std::size_t s = static_cast<std::size_t>(ref.slot[static_cast<std::size_t>(i)]);
+    const Index* ring = ref.rings.data() + s * width;
+    for (std::size_t m = 1; m < width; ++m) visit(ref.order[static_cast<std::size_t>(ring[m])]);
+    for (Index k = ref.in_offsets[s]; k < ref.in_offsets[s + 1]; ++k)
+      visit(ref.order[static_cast<std::size_t>(ref.in_rings[static_cast<std::size_t>(k)])]);
   };
   // Where the limiter pulls a point: its base, in the result's coordinates.
   auto base_at = [&](Index i) -> Eigen::RowVector3d {
@@ -260,7 +320,9 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
       const std::size_t ui = static_cast<std::size_t>(i);
       if (!moved[ui]) continue;
       take(i);
-      for (Index k = ref.in_offsets[ui]; k < ref.in_offsets[ui + 1]; ++k) take(ref.in_rings[static_cast<std::size_t>(k)]);
+      const std::size_t s = static_cast<std::size_t>(ref.slot[ui]);
+      for (Index k = ref.in_offsets[s]; k < ref.in_offsets[s + 1]; ++k)
+        take(ref.order[static_cast<std::size_t>(ref.in_rings[static_cast<std::size_t>(k)])]);
     }
     find_folds_at(model, ref, edited, result, check, out.after);
     // Folds left: among the tested points, and the folds of this round that were not tested

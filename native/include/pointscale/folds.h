@@ -20,18 +20,23 @@ enum FoldKind : std::uint8_t {
 
 // What a result's folds are measured against, per point: which ring members to leave out,
 // as bits m = 1..ring_size - 1 of the ring's columns, and bit 0 for the ring's plane; and
-// what the tests and the limiter walk the rings with.
+// what the tests and the limiter walk the rings with. Everything per point is kept in a
+// spatial order ("slots": slot t holds point order[t]) and the rings name slots, so that a
+// ring's members lie close together in memory: a test then reads its neighbours from the
+// cache instead of from all over a large model.
 struct FoldReference {
-  IndexList rings;                         // #P by ring_size: each base point's ring (base_rings)
+  IndexList order;                         // #P: the point in each slot (morton_order of the base)
+  IndexList slot;                          // #P: the slot of each point (order inverted)
+  IndexList rings;                         // #P by ring_size, by slot: each slot's ring (base_rings) as slots,
+                                           // itself first
   int ring_size = 0;
-  std::vector<std::uint16_t> other_sheet;  // #P: members whose stored base normal faces away (n_i . n_j <= 0)
-  std::vector<std::uint16_t> exempt;       // #P: edges (bit m) and planes (bit 0) that already fold in the
-                                           // input, or empty: every fold counts
-  IndexList order;                         // #P: a spatial order (morton_order of the base) to test in, so
-                                           // that the rings of consecutive points share cache lines
+  Points base, normals;                    // #P by 3, by slot: the stored base and its normals
+  std::vector<std::uint16_t> other_sheet;  // #P, by slot: members whose stored base normal faces away (n_i . n_j <= 0)
+  std::vector<std::uint16_t> exempt;       // #P, by slot: edges (bit m) and planes (bit 0) that already fold in
+                                           // the input, or empty: every fold counts
   std::vector<Index> in_offsets;           // #P + 1, and
-  IndexList in_rings;                      // the points whose rings hold each point (the rings reversed):
-                                           // point j is in the rings of in_rings[in_offsets[j] .. in_offsets[j+1])
+  IndexList in_rings;                      // the slots whose rings hold each slot (the rings reversed): slot s
+                                           // is in the rings of in_rings[in_offsets[s] .. in_offsets[s+1])
 };
 
 // The reference of a model. input: #P by 3, its unedited reconstruction (the input), whose
