@@ -7,6 +7,7 @@ bpy scripts can call them directly; they are safe to run in a worker thread.
 from __future__ import annotations
 
 import inspect
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -89,15 +90,34 @@ def edited_base(dec, base: np.ndarray) -> np.ndarray | None:
     from its exact base and reads level 0's normals instead of fitting them (a third faster).
     Vertices the edit did not move get the exact base back, so the engine sees them unmoved
     (it turns no detail there) rather than rounded to single precision."""
-    b = np.array(base, dtype=np.float64)
-    if b.shape != dec.base.shape:
-        return b
-    exact = dec.base
-    unmoved = (b.astype(np.float32) == exact.astype(np.float32)).all(axis=1)
-    if unmoved.all():
+    if np.shape(base) != (dec.n_points, 3):
+        return np.array(base, dtype=np.float64)  # the engine says what is wrong with it
+    exact, exact32 = _exact_base(dec)
+    key = np.asarray(base, dtype=np.float32)
+    if np.array_equal(key, exact32):
         return None
+    b = np.array(base, dtype=np.float64)
+    same = key == exact32
+    unmoved = same[:, 0] & same[:, 1] & same[:, 2]
     b[unmoved] = exact[unmoved]
     return b
+
+
+# The exact base of the decompositions seen last, and as a key stores it: a decomposition never
+# changes, and at a million vertices fetching and rounding its base costs more than the compare.
+_exact_bases: dict = {}
+
+
+def _exact_base(dec):
+    held = _exact_bases.get(id(dec))
+    if held is not None and held[0]() is dec:
+        return held[1], held[2]
+    exact = dec.base
+    exact.setflags(write=False)
+    if len(_exact_bases) >= 4:
+        _exact_bases.pop(next(iter(_exact_bases)))
+    _exact_bases[id(dec)] = (weakref.ref(dec), exact, exact.astype(np.float32))
+    return exact, _exact_bases[id(dec)][2]
 
 
 def rebuild(ps, dec, base: np.ndarray, gains=None, prevent_folds: bool = False):

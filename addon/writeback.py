@@ -84,6 +84,8 @@ def clear(obj) -> list:
     folds = obj.vertex_groups.get(keys.FOLDS)
     if folds is not None:
         obj.vertex_groups.remove(folds)
+    if keys.FOLDS_MARKED in mesh.keys():
+        del mesh[keys.FOLDS_MARKED]
     masks = [keys.mask_name(l) for l in range(k) if obj.vertex_groups.get(keys.mask_name(l)) is not None]
     weights = group_weights.read(obj, masks, len(mesh.vertices)) if masks else []
     painted = []

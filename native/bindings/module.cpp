@@ -233,6 +233,7 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("details", [](const MultiscaleModel& s) { return Eigen::MatrixXd(s.details); })
       .def_property_readonly("base_normals", [](const MultiscaleModel& s) { return s.base_normals; })
       .def_property_readonly("bands", &MultiscaleModel::bands)
+      .def_property_readonly("points", [](const MultiscaleModel& s) { return s.base.rows(); })
       .def_property_readonly("parts", [](const MultiscaleModel& s) -> py::object {
         if (s.parts.empty()) return py::none();
         return to_array(s.parts, {static_cast<py::ssize_t>(s.parts.size())});

@@ -80,7 +80,7 @@ class Decomposition:
 
     @property
     def n_points(self) -> int:
-        return self._model.base.shape[0] if self._mirror is None else self._mirror.n
+        return self._model.points if self._mirror is None else self._mirror.n
 
     @property
     def parts(self) -> list[dict] | None:
