@@ -120,3 +120,15 @@ def test_bake_filter_says_how_many_points_fold_and_prevent_folds_removes_them():
     me.multiscale.prevent_folds = True
     assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
     assert folded() == 0
+    # Nothing folds again: the emptied group is kept as it is (no work at a million vertices),
+    # and folds that come back are marked in it.
+    group = obj.vertex_groups[keys.FOLDS]
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    assert obj.vertex_groups[keys.FOLDS] == group and folded() == 0
+    for name in bands:
+        me.shape_keys.key_blocks[name].value = keys.BAND_MAX
+    me.multiscale.prevent_folds = False
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    assert folded() > 20
+    assert bpy.ops.pointscale.clear() == {"FINISHED"}
+    assert keys.FOLDS not in obj.vertex_groups and keys.FOLDS_MARKED not in me.keys()
