@@ -165,3 +165,38 @@ def test_max_planck_spikes_are_prevented():
     kept = folds.limiter == 1.0
     assert np.array_equal(prevented[kept], plain[kept])
     assert folds.changed.sum() < 0.4 * dec.n_points                             # measured 7235 of 25445
+
+
+def test_find_folds_is_the_definition_point_by_point_in_any_point_order(folding_sphere):
+    # folds.h's two tests written out in NumPy, on the stored base (reference "base"), against the
+    # core's, which keeps its rings in a spatial order of its own: the same points in a shuffled
+    # order must give the same folds, shuffled.
+    for order in (None, np.random.default_rng(3).permutation(folding_sphere.n_points)):
+        points = folding_sphere.level(folding_sphere.n_bands) if order is None else \
+            folding_sphere.level(folding_sphere.n_bands)[order]
+        dec = ps.decompose(points, levels=4)
+        result = ps.reconstruct(dec, GAINS)
+        kind = ps.find_folds(dec, result, fold_reference="base").kind
+        base, normals, r = dec.base, dec.normals(0), rings(dec)
+        same_side = (np.einsum("nc,njc->nj", normals, normals[r]) > 0) & (r != r[:, :1])
+        same_side[:, 0] = False
+        d_base = base[r] - base[:, None]
+        d_result = result[r] - result[:, None]
+        dots = np.einsum("njc,njc->nj", d_result, d_base)
+        norms = np.einsum("njc,njc->nj", d_result, d_result) * np.einsum("njc,njc->nj", d_base, d_base)
+        crossed = (same_side & (dots < 0) & (dots * dots > 1e-18 * norms)).any(axis=1)
+        # The plane test: the result's ring plane against the base's, in the base normal's tangents.
+        z = np.where(normals[:, 2] >= 0, 1.0, -1.0)
+        a = -1.0 / (z + normals[:, 2])
+        b = normals[:, 0] * normals[:, 1] * a
+        t1 = np.stack([1 + z * normals[:, 0] ** 2 * a, z * b, -z * normals[:, 0]], axis=1)
+        t2 = np.stack([b, z + normals[:, 1] ** 2 * a, -normals[:, 1]], axis=1)
+        u1 = np.einsum("njc,nc->nj", d_base, t1) * same_side
+        u2 = np.einsum("njc,nc->nj", d_base, t2) * same_side
+        plane = lambda d: np.cross(np.einsum("nj,njc->nc", u1, d), np.einsum("nj,njc->nc", u2, d))
+        nr, nb = plane(d_result), plane(d_base)
+        pd = np.einsum("nc,nc->n", nr, nb)
+        turned = (pd < 0) & (pd * pd > 1e-18 * np.einsum("nc,nc->n", nr, nr) * np.einsum("nc,nc->n", nb, nb))
+        assert crossed.sum() >= 30
+        assert np.array_equal((kind & ps.folds.CROSSED) > 0, crossed)
+        assert np.array_equal((kind & ps.folds.TURNED) > 0, turned)
