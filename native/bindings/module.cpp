@@ -13,6 +13,7 @@
 #include "pointscale/folds.h"
 #include "pointscale/mls_projection.h"
 #include "pointscale/normal_estimation.h"
+#include "pointscale/oriented_normals.h"
 #include "pointscale/parallel.h"
 #include "pointscale/reconstruction.h"
 #include "pointscale/reconstructor.h"
@@ -463,15 +464,15 @@ PYBIND11_MODULE(_core, m) {
     return py::make_tuple(c.centroids, to_array(c.labels, {static_cast<py::ssize_t>(c.labels.size())}));
   });
 
-  m.def("estimate_normals", [](const DoubleArray& points, int neighbors, bool orient) {
+  // width: the orientation graph's (oriented_normals), for tests and bench/normals_bench.py;
+  // estimate_normals in Python leaves it at its default.
+  m.def("estimate_normals", [](const DoubleArray& points, int neighbors, bool orient, int width) {
     Points p = to_points(points);
     return without_gil([&] {
-      SpatialIndex index(p);
-      Points normals = pca_normals(index, neighbors);
-      if (orient) orient_normals(index, normals, neighbors);
-      return normals;
+      if (orient) return oriented_normals(std::move(p), neighbors, width);
+      return pca_normals(SpatialIndex(std::move(p)), neighbors);
     });
-  });
+  }, py::arg("points"), py::arg("neighbors"), py::arg("orient"), py::arg("width") = orientation_width);
 
   // Every point's k nearest among the points themselves (the rows decompose's kNN passes
   // use), for tests against a brute-force search, and the same rows from a kd-tree query per

@@ -1,6 +1,7 @@
 #include "pointscale/spatial_index.h"
 
 #include <nanoflann.hpp>
+#include <utility>
 
 #include "pointscale/parallel.h"
 #include "pointscale/self_knn.h"
@@ -36,7 +37,8 @@ struct SpatialIndex::Impl {
   Points points;
   PointsAdaptor adaptor;
   std::unique_ptr<Tree> tree;
-  explicit Impl(const Points& p) : points(p), adaptor{&points} {
+  explicit Impl(const Points& p) : Impl(Points(p)) {}
+  explicit Impl(Points&& p) : points(std::move(p)), adaptor{&points} {
     tree = std::make_unique<Tree>(3, adaptor, tree_params());
 #if !defined(NANOFLANN_VERSION) || NANOFLANN_VERSION < 0x150
     // Some releases before 1.5 build the tree in the constructor (bookworm's 1.4.3 does),
@@ -47,6 +49,7 @@ struct SpatialIndex::Impl {
 };
 
 SpatialIndex::SpatialIndex(const Points& points) : impl_(std::make_unique<Impl>(points)) {}
+SpatialIndex::SpatialIndex(Points&& points) : impl_(std::make_unique<Impl>(std::move(points))) {}
 SpatialIndex::~SpatialIndex() = default;
 SpatialIndex::SpatialIndex(SpatialIndex&&) noexcept = default;
 SpatialIndex& SpatialIndex::operator=(SpatialIndex&&) noexcept = default;

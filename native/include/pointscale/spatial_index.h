@@ -11,6 +11,8 @@ class SpatialIndex {
  public:
   // points  #P by 3; copied, so the index owns what it searches.
   explicit SpatialIndex(const Points& points);
+  // The same, taking the points instead of copying them.
+  explicit SpatialIndex(Points&& points);
   ~SpatialIndex();
   SpatialIndex(SpatialIndex&&) noexcept;
   SpatialIndex& operator=(SpatialIndex&&) noexcept;
