@@ -1,16 +1,29 @@
 #!/usr/bin/env python3
-"""Pointscale speed benchmark against PCL's MovingLeastSquares, side by side in ONE run.
+"""Pointscale speed benchmark against PCL's MovingLeastSquares and Open3D's smooth_mls, side by side in ONE run.
 
     python bench/run.py                 # 100k + 1M synthetic, dragon, happy_buddha_scans
     python bench/run.py --quick         # small smoke test (20k synthetic only)
-    python bench/run.py --sizes 100k,1M --no-pcl
+    python bench/run.py --sizes 100k,1M --no-pcl --no-open3d
     python bench/run.py --huge          # also a 10M-point synthetic cloud
 
-For every input cloud the same float32-exact points are fed to both sides:
+Every input is timed in two orders (--orders):
+  coherent  the order a real input comes in, each peer's best case: file order for the
+            scans (scan lines, mesh vertex order), a Morton (Z-order) sort for the
+            synthetic clouds (whose generator draws directions at random);
+  shuffled  the same points under one fixed random permutation (seed 7).
+PCL and Open3D do not reorder points, so a shuffled cloud slows their kd-tree walks;
+pointscale sorts the points spatially itself.
+
+For every input cloud and order the same float32-exact points are fed to every side:
   (a) pointscale.decompose(points, levels=4, neighbors=K) wall time,
   (b) one PCL MLS pass (order 1, radius calibrated so the mean neighbour count is K,
       same thread count), wall time of process() only, from bench/peers/pcl_mls,
-  (c) ratio (a)/(b)                                  target < 1.0 (at 1M),
+  (b') one Open3D PointCloud.smooth_mls pass (PyPI open3d; a weighted PCA plane per point,
+      the point projected onto it), wall time of that call only, twice: with
+      KDTreeSearchParamRadius(PCL's radius) (Gaussian weights exp(-d^2/r^2), PCL's own)
+      and with KDTreeSearchParamKNN(K) (uniform weights, pointscale's neighbourhood),
+      OMP_NUM_THREADS = the same thread count,
+  (c) ratio (a)/(faster of (b), (b')), per order            target < 1.0 (at 1M),
   (d) pointscale.reconstruct(dec, base=base), median of several runs, with base = dec.base
       taken once before them, as an editor holds its edited base (through the edited-base
       path; handed back unchanged, so no point turns), and the same through
@@ -24,8 +37,11 @@ For every input cloud the same float32-exact points are fed to both sides:
                                                       target < 300 bytes/point.
 Timed code never runs in a test; this script only prints.
 
-Every measurement runs in its own subprocess (one per cloud per side) so that peak
-RSS is per-cloud and a crash on one input does not lose the others.
+Every pass runs in a fresh subprocess (one per cloud, order, side and repetition, each
+building its own index), and the repetitions are interleaved: round 1 runs every side on
+every order, then round 2, so that load from other processes falls on all of them alike.
+Medians over the rounds are reported. (d) and (e) come from the first round's pointscale
+process.
 """
 from __future__ import annotations
 
@@ -50,6 +66,8 @@ PEER_BUILD = HERE / "peers" / "build" / "pcl_mls"
 PEER_BIN = PEER_BUILD / "pcl_mls_bench"
 DEFAULT_DATA = (REPO / ".." / "shared" / "data").resolve()
 DATASETS = ("dragon.ply", "happy_buddha_scans.ply")
+ORDERS = ("coherent", "shuffled")
+SHUFFLE_SEED = 7
 
 TARGET_RATIO = 1.0
 TARGET_RECON_MS = 20.0
@@ -118,6 +136,22 @@ def morton_order(points: np.ndarray) -> np.ndarray:
 
     code = spread(q[:, 0]) | (spread(q[:, 1]) << np.uint64(1)) | (spread(q[:, 2]) << np.uint64(2))
     return np.argsort(code, kind="stable")
+
+
+def in_order(points: np.ndarray, kind: str, order: str) -> np.ndarray:
+    """The points in the named order: 'coherent' (file order for a scan, Morton order for a
+    synthetic cloud) or 'shuffled' (a fixed random permutation of the coherent order)."""
+    if kind == "synthetic":
+        points = points[morton_order(points)]
+    if order == "shuffled":
+        points = points[np.random.default_rng(SHUFFLE_SEED).permutation(len(points))]
+    return points
+
+
+def order_label(kind: str, order: str) -> str:
+    if order == "shuffled":
+        return "shuffled"
+    return "Morton order" if kind == "synthetic" else "file order"
 
 
 def read_ply_xyz(path: Path) -> np.ndarray:
@@ -276,10 +310,84 @@ def worker_pointscale(args: argparse.Namespace) -> int:
     return 0
 
 
-def run_json_subprocess(cmd: list[str], timeout: float | None) -> tuple[dict | None, str]:
+def calibrate_radius(points: np.ndarray, k: int, tree, samples: int = 20_000) -> tuple[float, float]:
+    """The radius whose mean neighbour count (the query point included) over a random sample
+    of points is k, within 0.5%: bench/peers/pcl_mls's rule, for when PCL is not there.
+    tree is an open3d KDTreeFlann. Returns (radius, mean count obtained)."""
+    rng = np.random.default_rng(12345)
+    sample = points[rng.integers(0, len(points), min(samples, len(points)))]
+
+    def mean_count(r: float) -> float:
+        return float(np.mean([tree.search_radius_vector_3d(q, r)[0] for q in sample]))
+
+    r = float(np.mean([np.sqrt(tree.search_knn_vector_3d(q, k)[2][-1]) for q in sample]))
+    lo, hi, c = 0.0, r, mean_count(r)
+    while c < k:
+        lo, hi = hi, hi * np.sqrt(k / max(c, 1.0)) * 1.05
+        c = mean_count(hi)
+    if lo == 0.0:
+        lo, clo = hi, c
+        while clo >= k:
+            hi, c = lo, clo
+            lo *= np.sqrt(k / clo) * 0.95
+            clo = mean_count(lo)
+    radius, got = hi, c
+    for _ in range(40):
+        if abs(got - k) <= 0.005 * k:
+            break
+        mid = 0.5 * (lo + hi)
+        cm = mean_count(mid)
+        if cm < k:
+            lo = mid
+        else:
+            hi = radius = mid
+            got = cm
+    return radius, got
+
+
+def worker_open3d(args: argparse.Namespace) -> int:
+    """Runs in a fresh subprocess: one Open3D PointCloud.smooth_mls pass, one JSON line.
+
+    The thread count comes from OMP_NUM_THREADS, which the caller sets."""
+    import open3d as o3d
+
+    pts = np.fromfile(args.worker_open3d, dtype="<f4").reshape(-1, 3).astype(np.float64)
+    n = len(pts)
+    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts))
+    res = {"side": "open3d", "version": o3d.__version__, "n": n, "search": args.o3d_search,
+           "omp_num_threads": os.environ.get("OMP_NUM_THREADS")}
+    if args.o3d_search == "radius":
+        radius = args.radius
+        if not radius:
+            t0 = time.perf_counter()
+            radius, got = calibrate_radius(pts, args.neighbors, o3d.geometry.KDTreeFlann(cloud))
+            res.update({"calibrated": True, "mean_neighbors": got, "calib_s": time.perf_counter() - t0})
+        res["radius"] = radius
+        param = o3d.geometry.KDTreeSearchParamRadius(radius)
+    else:
+        param = o3d.geometry.KDTreeSearchParamKNN(args.neighbors)
+    was_reset = reset_peak_rss()
+    before = vm_status_kib()["VmRSS" if was_reset else "VmHWM"]
+    c0 = time.process_time()
+    t0 = time.perf_counter()
+    out = cloud.smooth_mls(param)
+    res["process_s"] = time.perf_counter() - t0
+    res["process_cpu_s"] = time.process_time() - c0
+    res["peak_bytes_per_point"] = (vm_status_kib()["VmHWM"] - before) * 1024.0 / n
+    q = np.asarray(out.points)
+    res["n_out"] = len(q)
+    if len(q) == n:  # sanity: how far the pass moved the points, of the bbox diagonal
+        diag = float(np.linalg.norm(pts.max(0) - pts.min(0)))
+        res["mean_displacement_rel"] = float(np.linalg.norm(q - pts, axis=1).mean() / diag)
+    print(json.dumps(res), flush=True)
+    return 0
+
+
+def run_json_subprocess(cmd: list[str], timeout: float | None,
+                        env: dict | None = None) -> tuple[dict | None, str]:
     """Run cmd, return (last JSON line on stdout, error text)."""
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
     except subprocess.TimeoutExpired:
         return None, f"timed out after {timeout:.0f} s"
     for line in reversed(proc.stdout.strip().splitlines()):
@@ -322,78 +430,142 @@ def build_peer(force: bool = False) -> tuple[Path | None, str]:
 
 # --------------------------------------------------------------------------- table
 
+SIDES = ("ps", "pcl", "o3d_radius", "o3d_knn")
+SIDE_NAMES = {"ps": "pointscale", "pcl": "PCL MLS", "o3d_radius": "Open3D smooth_mls (radius)",
+              "o3d_knn": "Open3D smooth_mls (kNN)"}
+PEERS = ("pcl", "o3d_radius", "o3d_knn")
+
+
 def fmt(x, spec, missing="n/a"):
     return missing if x is None else format(x, spec)
 
 
+def wall(r: dict, side: str):
+    return (r.get(side) or {}).get("wall_s")
+
+
+def faster_peer(r: dict) -> tuple[str | None, float | None]:
+    """The peer pass that was fastest on this input and order (median wall time)."""
+    best = [(wall(r, s), s) for s in PEERS if wall(r, s)]
+    if not best:
+        return None, None
+    t, side = min(best)
+    return side, t
+
+
+def peer_ratio(r: dict) -> tuple[float | None, str | None]:
+    a = wall(r, "ps")
+    side, b = faster_peer(r)
+    return ((a / b) if (a is not None and b) else None), side
+
+
+def time_cell(r: dict, side: str, args: argparse.Namespace) -> str:
+    if r.get(side + "_timeout"):
+        return f"> {r[side + '_timeout']:.0f} (timeout)"
+    res = r.get(side)
+    if not res:
+        return "FAILED" if r.get(side + "_err") else "n/a"
+    cell = f"{res['wall_s']:.3f}"
+    if len(res["all_s"]) < args.reps:
+        cell += f" ({len(res['all_s'])} run{'s' if len(res['all_s']) > 1 else ''})"
+    return cell
+
+
 def render(rows: list[dict], args: argparse.Namespace) -> str:
-    head = ("| input | points | K | pointscale decompose, 4 levels (s) | PCL MLS pass (s) "
-            "| PCL radius / mean nbrs | ratio (a)/(b) | CPU-time ratio | reconstruct median / first (ms) "
-            "| Reconstructor median / setup (ms) | recon max err / diag | peak mem (B/pt) | PCL peak (B/pt) |")
-    sep = "|" + "|".join(["---"] * (head.count("|") - 1)) + "|"
-    out = [head, sep]
+    """Three tables: the ratio per input and order, every side's time, and the rest."""
+    out = ["| input | points | " + " | ".join(
+        f"{o} order: pointscale / faster peer" if o == "coherent" else f"{o}: pointscale / faster peer"
+        for o in args.orders) + " |"]
+    out.append("|" + "|".join(["---"] * (2 + len(args.orders))) + "|")
+    names = list(dict.fromkeys(r["name"] for r in rows))
+    for name in names:
+        cells = []
+        n = None
+        for o in args.orders:
+            r = next((x for x in rows if x["name"] == name and x["order"] == o), None)
+            if r is None:
+                cells.append("n/a")
+                continue
+            n = r["n"]
+            ratio, side = peer_ratio(r)
+            cells.append("n/a" if ratio is None else
+                         f"**{ratio:.2f}** ({wall(r, 'ps'):.3f} s / {wall(r, side):.3f} s "
+                         f"{SIDE_NAMES[side]}; {r['order_label']})")
+        out.append(f"| {name} | {n:,} | " + " | ".join(cells) + " |")
+
+    out += ["", "| input | order | pointscale decompose, %d levels (s) | PCL MLS pass (s) "
+            "| Open3D smooth_mls, radius (s) | Open3D smooth_mls, kNN (s) | faster peer "
+            "| ratio pointscale / faster peer | CPU-time ratio (pointscale / that peer, s) |" % args.levels]
+    out.append("|" + "|".join(["---"] * 9) + "|")
+    for r in rows:
+        ratio, side = peer_ratio(r)
+        if r.get("ps_timeout") and faster_peer(r)[1]:
+            ratio_cell = f"> {r['ps_timeout'] / faster_peer(r)[1]:.0f}"
+        else:
+            ratio_cell = fmt(ratio, ".2f")
+        cpu_cell = "n/a"
+        ps = r.get("ps") or {}
+        if side and ps.get("cpu_s") is not None and r[side].get("cpu_s"):
+            cpu_cell = (f"{ps['cpu_s'] / r[side]['cpu_s']:.2f} "
+                        f"({ps['cpu_s']:.2f} / {r[side]['cpu_s']:.2f})")
+        out.append(f"| {r['name']} | {r['order_label']} | " +
+                   " | ".join(time_cell(r, sd, args) for sd in SIDES) +
+                   f" | {SIDE_NAMES[side] if side else 'n/a'} | {ratio_cell} | {cpu_cell} |")
+
+    out += ["", "| input | order | K | PCL radius / mean nbrs | reconstruct median / first (ms) "
+            "| Reconstructor median / setup (ms) | both on a moved base (ms) | recon max err / diag "
+            "| peak mem (B/pt) | PCL peak (B/pt) | Open3D peak, radius / kNN (B/pt) |"]
+    out.append("|" + "|".join(["---"] * 11) + "|")
     for r in rows:
         ps, pc = r.get("ps") or {}, r.get("pcl") or {}
-        a = ps.get("decompose_s")
-        b = pc.get("process_s")
-        ratio = (a / b) if (a is not None and b) else None
-        a_cell = fmt(a, ".3f", "FAILED" if r.get("ps_err") else "n/a")
-        b_cell = fmt(b, ".3f", "FAILED" if r.get("pcl_err") else "n/a")
-        ratio_cell = fmt(ratio, ".2f")
-        cpu_ratio_cell = "n/a"
-        if ps.get("decompose_cpu_s") is not None and pc.get("process_cpu_s"):
-            cpu_ratio_cell = (f"{ps['decompose_cpu_s'] / pc['process_cpu_s']:.2f} "
-                              f"({ps['decompose_cpu_s']:.2f} / {pc['process_cpu_s']:.2f} s)")
-        if ps and ps.get("decompose_reps", 1) < args.reps:
-            a_cell += f" ({ps['decompose_reps']} run{'s' if ps['decompose_reps'] > 1 else ''})"
-        if r.get("ps_timeout"):
-            a_cell = f"> {r['ps_timeout']:.0f} (timeout)"
-            if b:
-                ratio_cell = f"> {r['ps_timeout'] / b:.0f}"
-        if r.get("pcl_timeout"):
-            b_cell = f"> {r['pcl_timeout']:.0f} (timeout)"
         rad = (f"{pc['radius']:.4g} / {pc['mean_neighbors']:.1f}" if pc else "n/a")
         recon = ("n/a" if ps.get("reconstruct_median_ms") is None else
                  f"{ps['reconstruct_median_ms']:.1f} / {ps['reconstruct_first_ms']:.1f}")
         solver = ("n/a" if ps.get("reconstructor_median_ms") is None else
                   f"{ps['reconstructor_median_ms']:.1f} / {ps['reconstructor_setup_ms']:.1f}"
                   + ("" if ps.get("reconstructor_identical") else " (DIFFERS)"))
+        moved = ("n/a" if ps.get("reconstruct_moved_median_ms") is None else
+                 f"{ps['reconstruct_moved_median_ms']:.1f} / {ps['reconstructor_moved_median_ms']:.1f}")
         pcl_mem = None
         if pc:
             pcl_mem = (pc["hwm_after_kib"] - pc["rss_before_kib"]) * 1024.0 / pc["n"]
+        o3d_mem = " / ".join(fmt((r.get(sd) or {}).get("peak_bytes_per_point"), ".0f")
+                             for sd in ("o3d_radius", "o3d_knn"))
         out.append(
-            f"| {r['name']} | {r['n']:,} | {args.neighbors} | "
-            f"{a_cell} | {b_cell} | {rad} | {ratio_cell} | {cpu_ratio_cell} | {recon} | {solver} | "
+            f"| {r['name']} | {r['order_label']} | {args.neighbors} | {rad} | {recon} | {solver} | {moved} | "
             f"{fmt(ps.get('reconstruct_max_err_rel'), '.1e')} | "
-            f"{fmt(ps.get('peak_bytes_per_point'), '.0f')} | {fmt(pcl_mem, '.0f')} |")
+            f"{fmt(ps.get('peak_bytes_per_point'), '.0f')} | {fmt(pcl_mem, '.0f')} | {o3d_mem} |")
     return "\n".join(out)
 
 
 def verdicts(rows: list[dict]) -> list[str]:
     lines = []
     for r in rows:
-        ps, pc = r.get("ps") or {}, r.get("pcl") or {}
-        if r["kind"] == "synthetic" and r["n"] == 1_000_000 and ps and pc:
-            ratio = ps["decompose_s"] / pc["process_s"]
-            lines.append(f"ratio at 1M synthetic: {ratio:.2f} (target < {TARGET_RATIO}) "
-                         f"-> {'MET' if ratio < TARGET_RATIO else 'NOT MET'}")
-        if r["kind"] == "synthetic" and r["n"] == 100_000 and ps.get("reconstruct_median_ms") is not None:
+        ps = r.get("ps") or {}
+        ratio, side = peer_ratio(r)
+        big = (r["kind"] == "synthetic" and r["n"] == 1_000_000) or r["kind"] == "data"
+        if big and ratio is not None:
+            lines.append(f"{r['name']}, {r['order_label']}: decompose / faster peer ({SIDE_NAMES[side]}) "
+                         f"= {ratio:.2f} (target <= {TARGET_RATIO}) -> "
+                         f"{'MET' if ratio <= TARGET_RATIO else 'NOT MET'}")
+        if (r["kind"] == "synthetic" and r["n"] == 100_000 and r["order"] == "shuffled"
+                and ps.get("reconstruct_median_ms") is not None):
             ms = ps["reconstruct_median_ms"]
-            lines.append(f"reconstruct at 100k x 4 levels, pointscale.reconstruct: {ms:.1f} ms median (target < "
-                         f"{TARGET_RECON_MS:.0f} ms) -> {'MET' if ms < TARGET_RECON_MS else 'NOT MET'}")
+            lines.append(f"reconstruct at 100k x 4 levels (shuffled), pointscale.reconstruct: {ms:.1f} ms median "
+                         f"(target < {TARGET_RECON_MS:.0f} ms) -> {'MET' if ms < TARGET_RECON_MS else 'NOT MET'}")
             if ps.get("reconstructor_median_ms") is not None:
                 ms = ps["reconstructor_median_ms"]
                 same = ps.get("reconstructor_identical")
-                lines.append(f"reconstruct at 100k x 4 levels, pointscale.Reconstructor: {ms:.1f} ms median, "
-                             f"setup {ps['reconstructor_setup_ms']:.1f} ms once, points "
+                lines.append(f"reconstruct at 100k x 4 levels (shuffled), pointscale.Reconstructor: {ms:.1f} ms "
+                             f"median, setup {ps['reconstructor_setup_ms']:.1f} ms once, points "
                              f"{'identical' if same else 'DIFFERENT'} (target < {TARGET_RECON_MS:.0f} ms) -> "
                              f"{'MET' if same and ms < TARGET_RECON_MS else 'NOT MET'}")
             if ps.get("reconstruct_moved_median_ms") is not None:
                 a, b = ps["reconstruct_moved_median_ms"], ps["reconstructor_moved_median_ms"]
-                lines.append(f"reconstruct at 100k x 4 levels on a base moved everywhere: reconstruct {a:.1f} ms, "
-                             f"Reconstructor {b:.1f} ms median (target < {TARGET_RECON_MS:.0f} ms) -> "
+                lines.append(f"reconstruct at 100k x 4 levels (shuffled) on a base moved everywhere: reconstruct "
+                             f"{a:.1f} ms, Reconstructor {b:.1f} ms median (target < {TARGET_RECON_MS:.0f} ms) -> "
                              f"{'MET' if max(a, b) < TARGET_RECON_MS else 'NOT MET'}")
-    worst = [(r["ps"]["peak_bytes_per_point"], r["name"]) for r in rows if r.get("ps")]
+    worst = [(r["ps"]["peak_bytes_per_point"], f"{r['name']}, {r['order_label']}") for r in rows if r.get("ps")]
     if worst:
         bpp, name = max(worst)
         lines.append(f"peak memory, worst input ({name}): {bpp:.0f} B/point (target < "
@@ -401,7 +573,7 @@ def verdicts(rows: list[dict]) -> list[str]:
     huge = [r for r in rows if r["kind"] == "synthetic" and r["n"] >= 10_000_000]
     for r in huge:
         ok = bool(r.get("ps"))
-        lines.append(f"{size_label(r['n'])} decompose: "
+        lines.append(f"{size_label(r['n'])} decompose, {r['order_label']}: "
                      f"{'completed' if ok else 'FAILED: ' + str(r.get('ps_err'))}")
     return lines
 
@@ -449,33 +621,51 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--sizes", type=lambda s: [parse_size(x) for x in s.split(",") if x.strip()],
                    help="comma-separated synthetic sizes, e.g. 100k,1M (default 100k,1M)")
     p.add_argument("--huge", action="store_true", help="also decompose a 10M-point synthetic cloud")
+    p.add_argument("--orders", type=lambda s: [x.strip() for x in s.split(",") if x.strip()],
+                   default=list(ORDERS),
+                   help="input orders to time, of coherent,shuffled (default both): coherent = file "
+                        "order for scans, Morton order for synthetic clouds; shuffled = a fixed "
+                        "random permutation")
     p.add_argument("--morton", action="store_true",
-                   help="feed both sides the synthetic clouds in Morton order instead of random order")
+                   help="the coherent order only (same as --orders coherent; kept for old commands)")
     p.add_argument("--no-pcl", action="store_true", help="skip the PCL peer")
-    p.add_argument("--no-pointscale", action="store_true", help="skip pointscale (PCL only)")
+    p.add_argument("--no-open3d", action="store_true", help="skip the Open3D peer")
+    p.add_argument("--open3d-search", choices=("radius", "knn", "both"), default="both",
+                   help="Open3D smooth_mls neighbourhoods: PCL's radius, K nearest, or both (default)")
+    p.add_argument("--no-pointscale", action="store_true", help="skip pointscale (peers only)")
     p.add_argument("--no-data", action="store_true", help="skip the real scans")
     p.add_argument("--data-dir", type=Path, default=DEFAULT_DATA,
                    help=f"where dragon.ply etc. live (default {DEFAULT_DATA})")
-    p.add_argument("--neighbors", "-k", type=int, default=24, help="K for both sides (default 24)")
+    p.add_argument("--neighbors", "-k", type=int, default=24, help="K for every side (default 24)")
     p.add_argument("--levels", type=int, default=4, help="decomposition levels (default 4)")
     p.add_argument("--threads", type=int, default=2,
-                   help="threads for both sides (default 2, the issue's reference)")
+                   help="threads for every side (default 2, the issue's reference)")
     p.add_argument("--recon-reps", type=int, default=None,
-                   help="reconstruct runs per cloud (default 9; 3 with --quick)")
+                   help="reconstruct runs per cloud and order (default 9; 3 with --quick)")
     p.add_argument("--reps", type=int, default=None,
-                   help="decompose and PCL passes per cloud, median reported (default 3; "
+                   help="interleaved rounds (a fresh process per pass), median reported (default 3; "
                         "1 with --quick and for >= 10M points)")
     p.add_argument("--timeout", type=float, default=600.0,
                    help="per-subprocess timeout in s (default 600); a timed-out cell reads '> T'")
     p.add_argument("--rep-budget", type=float, default=60.0,
-                   help="stop repeating a decompose once its runs took this many s (default 60)")
+                   help="stop repeating a side on an input once its passes took this many s (default 60)")
     p.add_argument("--json", type=Path, help="also write all raw results to this file")
     p.add_argument("--worker-pointscale", help=argparse.SUPPRESS)
+    p.add_argument("--worker-open3d", help=argparse.SUPPRESS)
+    p.add_argument("--o3d-search", default="knn", help=argparse.SUPPRESS)
+    p.add_argument("--radius", type=float, default=0.0, help=argparse.SUPPRESS)
     args = p.parse_args(argv)
 
     if args.worker_pointscale:
         return worker_pointscale(args)
+    if args.worker_open3d:
+        return worker_open3d(args)
 
+    if args.morton:
+        args.orders = ["coherent"]
+    bad = [o for o in args.orders if o not in ORDERS]
+    if bad or not args.orders:
+        p.error(f"--orders takes {','.join(ORDERS)}, not {','.join(bad) or 'nothing'}")
     if args.reps is None:
         args.reps = 1 if args.quick else 3
     if args.recon_reps is None:
@@ -484,13 +674,14 @@ def main(argv: list[str] | None = None) -> int:
     if args.huge:
         sizes = sizes + [10_000_000]
 
-    print("# pointscale vs PCL MovingLeastSquares")
+    print("# pointscale vs PCL MovingLeastSquares and Open3D smooth_mls")
     print("machine:", machine_line())
     print("command:", "python bench/run.py" + ("" if not sys.argv[1:] else " " + " ".join(sys.argv[1:])))
     print("load average at start:", open("/proc/loadavg").read().split()[:3],
           "(others' processes on this machine disturb timings)")
-    print(f"K={args.neighbors} levels={args.levels} threads={args.threads} "
-          f"reps={args.reps} (median) reconstruct reps={args.recon_reps}", flush=True)
+    print(f"K={args.neighbors} levels={args.levels} threads={args.threads} orders={','.join(args.orders)} "
+          f"rounds={args.reps} (median, interleaved, a fresh process per pass) "
+          f"reconstruct reps={args.recon_reps}", flush=True)
 
     # --- which sides can run
     have_ps = False
@@ -518,11 +709,33 @@ def main(argv: list[str] | None = None) -> int:
             print("  -> PCL columns will read n/a")
         else:
             print("PCL peer:", peer.relative_to(REPO))
+    o3d_modes: list[str] = []
+    o3d_why = "skipped (--no-open3d)"
+    if not args.no_open3d:
+        chk = subprocess.run([sys.executable, "-c",
+                              "import open3d; print(open3d.__version__, "
+                              "hasattr(open3d.geometry.PointCloud, 'smooth_mls'))"],
+                             capture_output=True, text=True)
+        words = chk.stdout.split()
+        if chk.returncode != 0:
+            last = (chk.stderr.strip().splitlines() or ["?"])[-1]
+            o3d_why = f"open3d not importable ({last}): `pip install open3d`"
+            if "libusb" in last:
+                o3d_why += " and `apt-get install -y libusb-1.0-0`"
+        elif words[-1:] != ["True"]:
+            o3d_why = f"open3d {words[0] if words else '?'} has no PointCloud.smooth_mls"
+        else:
+            o3d_modes = ["radius", "knn"] if args.open3d_search == "both" else [args.open3d_search]
+            print(f"Open3D peer: open3d {words[0]}, PointCloud.smooth_mls ({' and '.join(o3d_modes)} search), "
+                  f"OMP_NUM_THREADS={args.threads}")
+        if not o3d_modes:
+            print("Open3D peer: UNAVAILABLE -", o3d_why)
+            print("  -> Open3D columns will read n/a")
+    o3d_env = dict(os.environ, OMP_NUM_THREADS=str(args.threads))
     print(flush=True)
 
-    order = "Morton order" if args.morton else "random order"
     inputs: list[tuple[str, str, object]] = [
-        ("synthetic", f"bumpy sphere {size_label(n)} ({order})", n) for n in sizes]
+        ("synthetic", f"bumpy sphere {size_label(n)}", n) for n in sizes]
     if not (args.no_data or args.quick):
         for name in DATASETS:
             path = args.data_dir / name
@@ -537,79 +750,139 @@ def main(argv: list[str] | None = None) -> int:
         for kind, name, src in inputs:
             t0 = time.perf_counter()
             pts = bumpy_sphere(src) if kind == "synthetic" else read_ply_xyz(src)
-            if kind == "synthetic" and args.morton:
-                pts = pts[morton_order(pts)]
             n = len(pts)
-            f32 = tmp / "cloud.f32"
-            npy = tmp / "cloud.npy"
-            pts.astype("<f4").tofile(f32)
-            np.save(npy, np.ascontiguousarray(pts, dtype=np.float64))
+            files, by_order = {}, {}
+            for order in args.orders:
+                f32, npy = tmp / f"cloud-{order}.f32", tmp / f"cloud-{order}.npy"
+                ordered = in_order(pts, kind, order)
+                ordered.astype("<f4").tofile(f32)
+                np.save(npy, np.ascontiguousarray(ordered, dtype=np.float64))
+                del ordered
+                files[order] = (f32, npy)
+                by_order[order] = {"kind": kind, "name": name, "order": order,
+                                   "order_label": order_label(kind, order), "n": n}
             del pts
-            print(f"[{name}] {n:,} points prepared in {time.perf_counter() - t0:.1f} s", flush=True)
-            row = {"kind": kind, "name": name, "n": n}
-            reps = 1 if n >= 10_000_000 else args.reps
+            print(f"[{name}] {n:,} points prepared in {len(args.orders)} orders in "
+                  f"{time.perf_counter() - t0:.1f} s", flush=True)
+            rounds = 1 if n >= 10_000_000 else args.reps
+            radius = None  # PCL's calibrated radius, shared by every later pass on this cloud
 
-            if peer is not None:
-                res, err = run_json_subprocess(
-                    [str(peer), str(f32), str(args.neighbors), "--threads", str(args.threads),
-                     "--reps", str(reps)],
-                    args.timeout)
-                row["pcl"], row["pcl_err"] = res, (err or None)
-                row["pcl_timeout"] = args.timeout if err.startswith("timed out") else None
-                if res:
-                    print(f"  PCL MLS: {res['process_s']:.3f} s {res['process_all_s']} (radius {res['radius']:.4g}, mean "
-                          f"{res['mean_neighbors']:.2f} / median {res['median_neighbors']} neighbours, "
-                          f"{res['n_out']:,} points out)", flush=True)
-                else:
-                    print("  PCL MLS FAILED:", err, flush=True)
-            else:
-                row["pcl"], row["pcl_err"] = None, None
+            def record(row: dict, side: str, res: dict | None, err: str, wall_key: str, cpu_key: str):
+                if not res:
+                    row[side + "_err"] = err
+                    if err.startswith("timed out"):
+                        row[side + "_timeout"] = args.timeout
+                    return None
+                agg = row.get(side)
+                if agg is None:
+                    agg = row[side] = dict(res, all_s=[], all_cpu_s=[])
+                agg["all_s"].append(res[wall_key])
+                agg["all_cpu_s"].append(res[cpu_key])
+                agg["wall_s"] = statistics.median(agg["all_s"])
+                agg["cpu_s"] = statistics.median(agg["all_cpu_s"])
+                return res[wall_key]
 
-            if have_ps:
-                res, err = run_json_subprocess(
-                    [sys.executable, str(Path(__file__).resolve()), "--worker-pointscale", str(npy),
-                     "--neighbors", str(args.neighbors), "--levels", str(args.levels),
-                     "--threads", str(args.threads), "--recon-reps", str(args.recon_reps),
-                     "--reps", str(reps), "--rep-budget", str(args.rep_budget)],
-                    args.timeout)
-                row["ps"], row["ps_err"] = res, (err or None)
-                row["ps_timeout"] = args.timeout if err.startswith("timed out") else None
-                if res:
-                    msg = (f"  pointscale decompose: {res['decompose_s']:.3f} s "
-                           f"{[round(t, 3) for t in res['decompose_all_s']]}, peak "
-                           f"{res['peak_bytes_per_point']:.0f} B/pt")
-                    if "reconstruct_median_ms" in res:
-                        msg += (f", reconstruct {res['reconstruct_median_ms']:.1f} ms median "
-                                f"(max err {res['reconstruct_max_err_rel']:.1e} of diag), Reconstructor "
-                                f"{res['reconstructor_median_ms']:.1f} ms median")
-                    print(msg, flush=True)
-                else:
-                    print("  pointscale FAILED:", err, flush=True)
-            else:
-                row["ps"], row["ps_err"] = None, None
-            rows.append(row)
+            def wanted(row: dict, side: str) -> bool:  # not failed, not over its time budget
+                if row.get(side + "_err"):
+                    return False
+                done = (row.get(side) or {}).get("all_s", [])
+                return sum(done) <= args.rep_budget or not done
+
+            for rnd in range(rounds):
+                for order in args.orders:
+                    row = by_order[order]
+                    f32, npy = files[order]
+                    said = []
+                    if peer is not None and wanted(row, "pcl"):
+                        cmd = [str(peer), str(f32), str(args.neighbors), "--threads", str(args.threads),
+                               "--reps", "1"]
+                        if radius:
+                            cmd += ["--radius", repr(radius)]
+                        res, err = run_json_subprocess(cmd, args.timeout)
+                        t = record(row, "pcl", res, err, "process_s", "process_cpu_s")
+                        if res and radius is None:
+                            radius = res["radius"]
+                        said.append(f"PCL {t:.3f} s" if t is not None else f"PCL FAILED: {err}")
+                    for mode in o3d_modes:
+                        side = "o3d_" + mode
+                        if not wanted(row, side):
+                            continue
+                        cmd = [sys.executable, str(Path(__file__).resolve()), "--worker-open3d", str(f32),
+                               "--o3d-search", mode, "--neighbors", str(args.neighbors)]
+                        if mode == "radius" and radius:
+                            cmd += ["--radius", repr(radius)]
+                        res, err = run_json_subprocess(cmd, args.timeout, env=o3d_env)
+                        t = record(row, side, res, err, "process_s", "process_cpu_s")
+                        if res and mode == "radius" and radius is None:
+                            radius = res["radius"]
+                        said.append(f"Open3D {mode} {t:.3f} s" if t is not None else
+                                    f"Open3D {mode} FAILED: {err}")
+                    if have_ps and wanted(row, "ps"):
+                        res, err = run_json_subprocess(
+                            [sys.executable, str(Path(__file__).resolve()), "--worker-pointscale", str(npy),
+                             "--neighbors", str(args.neighbors), "--levels", str(args.levels),
+                             "--threads", str(args.threads),
+                             "--recon-reps", str(args.recon_reps if rnd == 0 else 0),
+                             "--reps", "1", "--rep-budget", str(args.rep_budget)],
+                            args.timeout)
+                        t = record(row, "ps", res, err, "decompose_s", "decompose_cpu_s")
+                        if t is None:
+                            said.append(f"pointscale FAILED: {err}")
+                        else:
+                            msg = f"pointscale {t:.3f} s"
+                            if rnd == 0:
+                                msg += f" (peak {res['peak_bytes_per_point']:.0f} B/pt"
+                                if "reconstruct_median_ms" in res:
+                                    msg += (f", reconstruct {res['reconstruct_median_ms']:.1f} ms median, max err "
+                                            f"{res['reconstruct_max_err_rel']:.1e} of diag, Reconstructor "
+                                            f"{res['reconstructor_median_ms']:.1f} ms median")
+                                msg += ")"
+                            said.append(msg)
+                    print(f"  round {rnd + 1}, {row['order_label']}: " + " | ".join(said), flush=True)
+            for order in args.orders:
+                row = by_order[order]
+                if row.get("ps"):  # the names the rest of this file and older JSON readers use
+                    row["ps"]["decompose_s"] = row["ps"]["wall_s"]
+                    row["ps"]["decompose_all_s"] = row["ps"]["all_s"]
+                    row["ps"]["decompose_reps"] = len(row["ps"]["all_s"])
+                for side in PEERS:
+                    if row.get(side):
+                        row[side]["process_s"] = row[side]["wall_s"]
+                        row[side]["process_all_s"] = row[side]["all_s"]
+                if row.get("pcl"):
+                    row["pcl"]["radius"] = radius or row["pcl"]["radius"]
+                rows.append(row)
 
     print()
     print(render(rows, args))
     print()
+    print("order: coherent = file order for a scan, Morton (Z-order) sort for a synthetic cloud; shuffled = "
+          f"that order under a fixed random permutation (seed {SHUFFLE_SEED}).")
     print("(a) pointscale.decompose(points, levels=%d, neighbors=%d, threads=%d), wall time, "
-          "median of %d (fewer where marked: runs stop after --rep-budget %.0f s);"
+          "median of %d fresh processes (fewer where marked: a side stops repeating after --rep-budget %.0f s);"
           % (args.levels, args.neighbors, args.threads, args.reps, args.rep_budget))
     print("(b) pcl::MovingLeastSquares<PointXYZ, PointNormal>, order 1, radius calibrated to a mean of "
-          "K neighbours, %d threads, process() only, median of %d;" % (args.threads, args.reps))
-    print("CPU-time ratio: user+system CPU seconds of (a) over (b), all threads; less sensitive to other load than wall time.\n"
+          "K neighbours, %d threads, process() only (its kd-tree build included);" % args.threads)
+    print("(b') open3d PointCloud.smooth_mls, KDTreeSearchParamRadius(PCL's radius) and KDTreeSearchParamKNN(K), "
+          "OMP_NUM_THREADS=%d, that call only (its kd-tree build included); every pass interleaved with the "
+          "others, round by round, median of %d." % (args.threads, args.reps))
+    print("faster peer = the peer pass with the smallest median wall time on that input and order.")
+    print("CPU-time ratio: user+system CPU seconds of (a) over the faster peer's, all threads; less sensitive to other load than wall time.\n"
           "reconstruct = pointscale.reconstruct(dec, base=base), base = dec.base taken once before the runs; Reconstructor = "
-          "pointscale.Reconstructor(dec).reconstruct(base=base), called alternately with it (setup: building it, once); peak mem = VmHWM (peak RSS) "
-          "minus RSS after loading, fresh subprocess per cloud.")
+          "pointscale.Reconstructor(dec).reconstruct(base=base), called alternately with it (setup: building it, once); moved base = "
+          "both on a base a broad wave moved everywhere; peak mem = VmHWM (peak RSS) minus RSS after loading, first round's "
+          "process (the peers: around their pass).")
     if not have_ps:
         print("pointscale:", ps_why)
     if peer is None:
         print("PCL:", pcl_why)
+    if not o3d_modes:
+        print("Open3D:", o3d_why)
     print("load average at end:", open("/proc/loadavg").read().split()[:3])
     for r in rows:
-        for side in ("ps", "pcl"):
+        for side in SIDES:
             if r.get(side + "_err"):
-                print(f"{r['name']}: {'pointscale' if side == 'ps' else 'PCL'} failed: {r[side + '_err']}")
+                print(f"{r['name']}, {r['order_label']}: {SIDE_NAMES[side]} failed: {r[side + '_err']}")
     v = verdicts(rows)
     if v:
         print()
