@@ -12,6 +12,7 @@
 #include "pointscale/decomposition.h"
 #include "pointscale/folds.h"
 #include "pointscale/mls_projection.h"
+#include "pointscale/single_pass.h"
 #include "pointscale/normal_estimation.h"
 #include "pointscale/oriented_normals.h"
 #include "pointscale/parallel.h"
@@ -457,6 +458,21 @@ PYBIND11_MODULE(_core, m) {
     return py::make_tuple(r.positions, r.normals, r.not_converged, r.degenerate);
   }, py::arg("points"), py::arg("onto"), py::arg("kernel"), py::arg("neighbors"), py::arg("tolerance"),
      py::arg("max_iterations"), py::arg("progress") = py::none(), py::arg("near") = py::none());
+
+  // One plane fit and projection per point (single_pass.h). With self, the points are `onto`
+  // itself (checked by the Python layer), so `points` is None and nothing is copied twice.
+  m.def("project_single_pass", [](py::object points, const DoubleArray& onto, double kernel, int neighbors,
+                                  bool self, bool estimate, py::object progress) {
+    Points s = to_points(onto);
+    Points x = self ? Points() : to_points(points.cast<DoubleArray>());
+    PythonProgress pp(progress);
+    SinglePassResult r = without_gil([&] {
+      SpatialIndex index(s);
+      return mls_single_pass(self ? index.points() : x, self, index, kernel, neighbors, estimate, ProgressStage{pp.get(), 0.0, 1.0});
+    });
+    return py::make_tuple(r.positions, r.normals, r.moved, r.next_step, r.degenerate);
+  }, py::arg("points"), py::arg("onto"), py::arg("kernel"), py::arg("neighbors"), py::arg("self"),
+     py::arg("estimate"), py::arg("progress") = py::none());
 
   m.def("decimate", [](const DoubleArray& points, std::size_t target, double max_variation) {
     Points p = to_points(points);

@@ -10,7 +10,7 @@ from ._checks import (MAX_ITERATIONS, MAX_NEIGHBORS, as_callback, as_points, cen
 
 def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance: float = 1e-9,
             max_iterations: int = 50, threads: int = 0, progress=None, return_report: bool = False,
-            near=None):
+            near=None, single_pass: bool = False):
     """Projects points onto the MLS surface defined by the point set `onto` (the operator Psi).
 
     points  (n, 3) to project;  onto (m, 3) samples of the surface
@@ -21,8 +21,19 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
     near    optional (n,) index into `onto` of a sample near each point, such as the labels
             from decimate(points) when `onto` is its centroids: the points around one sample
             then share one neighbour query. Only a speed-up; the result does not change.
+    single_pass  one plane fit at each point and one projection onto it, as PCL's and Open3D's
+            MLS smoothing do, instead of iterating to the MLS surface: one neighbour query per
+            point, and no iteration (tolerance and max_iterations then only set what the
+            report counts as converged; near is not used). It stops where the iteration takes
+            its first step; a larger kernel (about 2.5-3) smooths noise as much as the peers.
     Returns (positions (n, 3), normals (n, 3)); with return_report also a dict with the number
     of points that did not converge and of points whose neighbourhood defines no plane.
+    With single_pass the report also says how far from converged the pass stops, per point
+    and relative to the kernel width h there: moved_mean and moved_max, the pass's own step
+    |result - point| / h, and next_step_mean and next_step_max, the step the iteration would
+    take next (its second fit, at the result, on the result's own neighbours: a second query
+    and fit per point, made only for the report); not_converged counts the points whose next
+    step exceeds tolerance x h, and passes is 1.
     Normals are unit and unoriented.
     """
     x = as_points(points)
@@ -40,8 +51,12 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
         if len(near) and (near.min() < 0 or near.max() >= len(s)):
             raise ValueError(f"near must index onto: each in [0, {len(s) - 1}], got [{near.min()}, {near.max()}]")
         near = near.astype(np.int32)
+    if not isinstance(single_pass, (bool, np.bool_)):
+        raise ValueError(f"single_pass must be True or False, got {single_pass!r}")
     origin = centre(s)
     set_threads(threads)
+    if single_pass:
+        return _single_pass(x, s, origin, kernel, neighbors, tolerance, progress, return_report)
     pos, nrm, not_converged, degenerate = _core.project(x - origin, s - origin, kernel, neighbors, tolerance,
                                                         max_iterations, as_callback(progress), near)
     pos = finite_result(pos + origin, "the projection")
@@ -49,6 +64,26 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
     if return_report:
         return pos, nrm, {"not_converged": int(not_converged), "degenerate": int(degenerate)}
     return pos, nrm
+
+
+def _single_pass(x, s, origin, kernel, neighbors, tolerance, progress, return_report):
+    # Projecting a cloud onto itself (smoothing it) lets the core take every point's
+    # neighbours from one all-points query (self_knn.h) instead of a tree query each.
+    same = x.shape == s.shape and np.array_equal(x, s)
+    pos, nrm, moved, next_step, degenerate = _core.project_single_pass(
+        None if same else x - origin, s - origin, kernel, neighbors, same, bool(return_report), as_callback(progress))
+    pos = finite_result(pos + origin, "the projection")
+    finite_result(nrm, "the projection's normals")
+    if not return_report:
+        return pos, nrm
+    fitted = len(moved) > 0
+    report = {"not_converged": int(np.count_nonzero(next_step > tolerance)), "degenerate": int(degenerate),
+              "passes": 1,
+              "moved_mean": float(moved.mean()) if fitted else 0.0,
+              "moved_max": float(moved.max()) if fitted else 0.0,
+              "next_step_mean": float(next_step.mean()) if fitted else 0.0,
+              "next_step_max": float(next_step.max()) if fitted else 0.0}
+    return pos, nrm, report
 
 
 def decimate(points, target: int, *, max_variation: float = 0.05):
