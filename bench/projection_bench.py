@@ -45,6 +45,8 @@ from pathlib import Path
 
 import numpy as np
 
+from run import morton_order  # bench/run.py's coherent order, the same curve for both benches
+
 HERE = Path(__file__).resolve().parent
 PEER_SRC = HERE / "peers" / "pcl_mls"
 PEER_BUILD = HERE / "peers" / "build" / "pcl_mls"
@@ -91,23 +93,6 @@ def torus_error(q: np.ndarray) -> np.ndarray:
 
 
 SHAPES = {"sphere": (noisy_sphere, sphere_error, SPHERE_SIGMA), "torus": (noisy_torus, torus_error, TORUS_SIGMA)}
-
-
-def morton_order(points: np.ndarray) -> np.ndarray:
-    """Indices sorting points along a 3D Z-order curve (10 bits per axis). The same curve as
-    bench/run.py's, kept here so that this script stands on its own."""
-    lo = points.min(axis=0)
-    extent = float((points.max(axis=0) - lo).max()) or 1.0
-    q = np.clip(((points - lo) / extent * 1023.0).astype(np.uint64), 0, 1023)
-
-    def spread(v):
-        v = (v | (v << np.uint64(16))) & np.uint64(0x30000FF)
-        v = (v | (v << np.uint64(8))) & np.uint64(0x300F00F)
-        v = (v | (v << np.uint64(4))) & np.uint64(0x30C30C3)
-        return (v | (v << np.uint64(2))) & np.uint64(0x9249249)
-
-    code = spread(q[:, 0]) | (spread(q[:, 1]) << np.uint64(1)) | (spread(q[:, 2]) << np.uint64(2))
-    return np.argsort(code, kind="stable")
 
 
 def parse_size(text: str) -> int:
