@@ -62,7 +62,8 @@ Points in_slot_order(const Eigen::Ref<const Points>& a, const FoldReference& ref
 SlotRows by_slot(const Points& a) { return SlotRows{a.data(), 3, nullptr}; }
 
 // The FoldKind bits of slot s (folds.h has the definitions). skip: ring members left out of
-// both tests; exempt: edges left out of the crossing test, and bit 0 the plane test.
+// both tests, and bit 0 the plane test on a ring with no plane; exempt: edges left out of the
+// crossing test, and bit 0 the plane test.
 inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std::uint16_t exempt, const SlotRows* edited,
                               const SlotRows& r, Index s) {
   const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
@@ -87,8 +88,30 @@ inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std:
     mb1 += u1 * db;
   }
   const Vec3 nr = mr0.cross(mr1), nb = mb0.cross(mb1);
-  if (reversed(nr, nb) && !(exempt & 1u)) kind |= fold_turned;
+  if (reversed(nr, nb) && !((exempt | skip) & 1u)) kind |= fold_turned;
   return kind;
+}
+
+// Whether the stored base's ring at slot s spreads along one line only (its tangent spread
+// across the line below on_a_line_spread of that along it): a strip of duplicated or collinear
+// scan points. Such a ring has no plane to turn over; its plane test would read the rounding
+// of a vanishing cross product and report folds that no limiter can undo (the dragon scan
+// has such strips).
+bool ring_on_a_line(const FoldReference& ref, std::uint16_t skip, Index s) {
+  constexpr double on_a_line_spread = 1e-3;  // eigenvalue ratio: a ring about 30 times longer than wide
+  const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
+  Vec3 t1, t2;
+  tangents(ref.normals.row(s).transpose(), t1, t2);
+  const Vec3 bi = ref.base.row(s).transpose();
+  double g00 = 0.0, g01 = 0.0, g11 = 0.0;
+  for (int m = 1; m < ref.ring_size; ++m) {
+    if ((skip >> m) & 1u) continue;
+    const Vec3 d0 = ref.base.row(ring[m]).transpose() - bi;
+    const double u0 = d0.dot(t1), u1 = d0.dot(t2);
+    g00 += u0 * u0; g01 += u0 * u1; g11 += u1 * u1;
+  }
+  const double half = 0.5 * (g00 + g11), gap = std::sqrt(0.25 * (g00 - g11) * (g00 - g11) + g01 * g01);
+  return !(half - gap > on_a_line_spread * (half + gap));
 }
 
 // The same, with the edges that fold as bits (bit 0 for the plane): what the input exempts.
@@ -143,6 +166,7 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input) 
       for (std::size_t m = 1; m < width; ++m)
         if (ring[m] == ring[0] || ref.normals.row(ring[m]).dot(ref.normals.row(row)) <= 0.0)
           skip |= static_cast<std::uint16_t>(1u << m);
+      if (ring_on_a_line(ref, skip, static_cast<Index>(t))) skip |= 1u;
       ref.other_sheet[t] = skip;
       if (input) ref.exempt[t] = folding_bits(ref, skip, in, static_cast<Index>(t));
     }
