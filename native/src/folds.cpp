@@ -62,7 +62,8 @@ Points in_slot_order(const Eigen::Ref<const Points>& a, const FoldReference& ref
 SlotRows by_slot(const Points& a) { return SlotRows{a.data(), 3, nullptr}; }
 
 // The FoldKind bits of slot s (folds.h has the definitions). skip: ring members left out of
-// both tests; exempt: edges left out of the crossing test, and bit 0 the plane test.
+// both tests, and bit 0 the plane test on a ring with no plane; exempt: edges left out of the
+// crossing test, and bit 0 the plane test.
 inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std::uint16_t exempt, const SlotRows* edited,
                               const SlotRows& r, Index s) {
   const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
@@ -87,8 +88,30 @@ inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std:
     mb1 += u1 * db;
   }
   const Vec3 nr = mr0.cross(mr1), nb = mb0.cross(mb1);
-  if (reversed(nr, nb) && !(exempt & 1u)) kind |= fold_turned;
+  if (reversed(nr, nb) && !((exempt | skip) & 1u)) kind |= fold_turned;
   return kind;
+}
+
+// Whether the stored base's ring at slot s spreads along one line only (its tangent spread
+// across the line below on_a_line_spread of that along it): a strip of duplicated or collinear
+// scan points. Such a ring has no plane to turn over; its plane test would read the rounding
+// of a vanishing cross product and report folds that no limiter can undo (the dragon scan
+// has such strips).
+bool ring_on_a_line(const FoldReference& ref, std::uint16_t skip, Index s) {
+  constexpr double on_a_line_spread = 1e-3;  // eigenvalue ratio: a ring about 30 times longer than wide
+  const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
+  Vec3 t1, t2;
+  tangents(ref.normals.row(s).transpose(), t1, t2);
+  const Vec3 bi = ref.base.row(s).transpose();
+  double g00 = 0.0, g01 = 0.0, g11 = 0.0;
+  for (int m = 1; m < ref.ring_size; ++m) {
+    if ((skip >> m) & 1u) continue;
+    const Vec3 d0 = ref.base.row(ring[m]).transpose() - bi;
+    const double u0 = d0.dot(t1), u1 = d0.dot(t2);
+    g00 += u0 * u0; g01 += u0 * u1; g11 += u1 * u1;
+  }
+  const double half = 0.5 * (g00 + g11), gap = std::sqrt(0.25 * (g00 - g11) * (g00 - g11) + g01 * g01);
+  return !(half - gap > on_a_line_spread * (half + gap));
 }
 
 // The same, with the edges that fold as bits (bit 0 for the plane): what the input exempts.
@@ -143,6 +166,7 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input) 
       for (std::size_t m = 1; m < width; ++m)
         if (ring[m] == ring[0] || ref.normals.row(ring[m]).dot(ref.normals.row(row)) <= 0.0)
           skip |= static_cast<std::uint16_t>(1u << m);
+      if (ring_on_a_line(ref, skip, static_cast<Index>(t))) skip |= 1u;
       ref.other_sheet[t] = skip;
       if (input) ref.exempt[t] = folding_bits(ref, skip, in, static_cast<Index>(t));
     }
@@ -224,7 +248,14 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
   };
   std::vector<double>& lambda = out.limiter;
   lambda.assign(n, 1.0);
-  std::vector<double> strength(n, 0.0), field(n, 0.0), scratch(n, 0.0);
+  // The limiter's layers: the strengths, `smoothing` widenings of them, then as many averagings;
+  // the last is 1 - lambda. A layer at a point reads the layer below at the point and its
+  // neighbours only, so when strengths change, each layer changes only within one more ring
+  // step of where the layer below changed: a round recomputes just that, and late rounds,
+  // with few folds left, cost little.
+  const int passes = 2 * options.smoothing;
+  std::vector<std::vector<double>> layer(static_cast<std::size_t>(passes) + 1, std::vector<double>(n, 0.0));
+  std::vector<double>& strength = layer.front();
   std::vector<int> stamp(n, -1);  // the list-building step that last took each point
   int step_id = 0;
   // A new list-building step into `list`: the returned function adds a point once per step.
@@ -237,86 +268,64 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
       list.push_back(j);
     };
   };
-  IndexList seeds, active, grown, check, folds;
-  // The result as reconstructed, for the points the limiter has touched (their slot in kept).
-  std::vector<Index> slot(n, -1);
-  IndexList touched;
-  Points kept;
+  IndexList dirty, grown, check, folds;
+  const Points reconstructed = result;  // where each point's limiter scales from
   std::vector<std::uint8_t> moved(n, 0);
   for (std::size_t i = 0; i < n; ++i)
     if (out.before[i] != fold_none) folds.push_back(static_cast<Index>(i));
-
-  // active, and every neighbour of it, into grown (each once).
-  auto widen = [&]() {
-    const auto take = start_list(grown);
-    for (Index i : active) {
-      take(i);
-      each_neighbour(i, take);
-    }
-  };
-  // One pass of the field over grown: the largest (widening) or the mean (averaging) of each
-  // point and its neighbours. field is zero outside active, so only grown can change.
-  auto pass = [&](bool largest) {
-    widen();
-    parallel_for(grown.size(), [&](std::size_t b, std::size_t e) {
-      for (std::size_t t = b; t < e; ++t) {
-        const Index j = grown[t];
-        double v = field[static_cast<std::size_t>(j)];
-        int count = 1;
-        each_neighbour(j, [&](Index k) {
-          const double f = field[static_cast<std::size_t>(k)];
-          v = largest ? std::max(v, f) : v + f;
-          ++count;
-        });
-        scratch[static_cast<std::size_t>(j)] = largest ? v : v / count;
-      }
-    }, {}, 512);
-    for (Index j : grown) field[static_cast<std::size_t>(j)] = scratch[static_cast<std::size_t>(j)];
-    active.swap(grown);
-  };
 
   while (!folds.empty() && out.rounds < options.max_rounds) {
     ++out.rounds;
     for (Index f : folds) {
       double& w = strength[static_cast<std::size_t>(f)];
-      if (w == 0.0) seeds.push_back(f);
       w = 1.0 - options.step * (1.0 - w);
     }
-    // The limiter afresh from every strength: a plateau, then a ramp (folds.h).
-    for (Index i : active) field[static_cast<std::size_t>(i)] = 0.0;
-    active = seeds;
-    for (Index s : seeds) field[static_cast<std::size_t>(s)] = strength[static_cast<std::size_t>(s)];
-    for (int k = 0; k < options.smoothing; ++k) pass(true);
-    for (int k = 0; k < options.smoothing; ++k) pass(false);
-    for (Index i : active) {
-      const std::size_t ui = static_cast<std::size_t>(i);
-      lambda[ui] = 1.0 - field[ui];
-      if (slot[ui] < 0) {
-        slot[ui] = static_cast<Index>(touched.size());
-        touched.push_back(i);
+    // Each layer again where the one below changed, and one ring step around it: the largest
+    // (widening) or the mean (averaging) of each point and its neighbours, the mean adding up
+    // in the neighbours' order, so that it is the same sum wherever it is recomputed.
+    dirty = folds;
+    for (int k = 1; k <= passes; ++k) {
+      const bool largest = k <= options.smoothing;
+      const auto take = start_list(grown);
+      for (Index i : dirty) {
+        take(i);
+        each_neighbour(i, take);
       }
+      const std::vector<double>& below = layer[static_cast<std::size_t>(k - 1)];
+      std::vector<double>& into = layer[static_cast<std::size_t>(k)];
+      parallel_for(grown.size(), [&](std::size_t b, std::size_t e) {
+        for (std::size_t t = b; t < e; ++t) {
+          const Index j = grown[t];
+          double v = below[static_cast<std::size_t>(j)];
+          int count = 1;
+          each_neighbour(j, [&](Index q) {
+            const double f = below[static_cast<std::size_t>(q)];
+            v = largest ? std::max(v, f) : v + f;
+            ++count;
+          });
+          into[static_cast<std::size_t>(j)] = largest ? v : v / count;
+        }
+      }, {}, 512);
+      dirty.swap(grown);
     }
-    // The touched points from their reconstructed rows; a touched point the limiter no longer
-    // reaches gets its row back exactly.
-    if (kept.rows() < static_cast<Eigen::Index>(touched.size())) {
-      Points more(static_cast<Eigen::Index>(touched.size()), 3);
-      more.topRows(kept.rows()) = kept;
-      for (Eigen::Index t = kept.rows(); t < more.rows(); ++t) more.row(t) = result.row(touched[static_cast<std::size_t>(t)]);
-      kept.swap(more);
-    }
-    for (Index i : touched) {
-      const std::size_t ui = static_cast<std::size_t>(i);
-      if (stamp[ui] != step_id) lambda[ui] = 1.0;
-      const Eigen::RowVector3d original = kept.row(slot[ui]);
-      const Eigen::RowVector3d b = base_at(i);
-      const Eigen::RowVector3d now = lambda[ui] == 1.0 ? original : Eigen::RowVector3d(b + lambda[ui] * (original - b));
-      moved[ui] = (now.array() != result.row(i).array()).any() ? 1 : 0;
-      result.row(i) = now;
-    }
+    // The points whose limiter may have changed, from their reconstructed rows.
+    const std::vector<double>& field = layer.back();
+    parallel_for(dirty.size(), [&](std::size_t b, std::size_t e) {
+      for (std::size_t t = b; t < e; ++t) {
+        const Index i = dirty[t];
+        const std::size_t ui = static_cast<std::size_t>(i);
+        lambda[ui] = 1.0 - field[ui];
+        const Eigen::RowVector3d original = reconstructed.row(i);
+        const Eigen::RowVector3d base = base_at(i);
+        const Eigen::RowVector3d now = lambda[ui] == 1.0 ? original : Eigen::RowVector3d(base + lambda[ui] * (original - base));
+        moved[ui] = (now.array() != result.row(i).array()).any() ? 1 : 0;
+        result.row(i) = now;
+      }
+    }, {}, 4096);
     // Test again every point that moved or whose ring holds one that moved: no other point's
     // folds can have changed.
     const auto take = start_list(check);
-    for (Index i : touched) {
+    for (Index i : dirty) {
       const std::size_t ui = static_cast<std::size_t>(i);
       if (!moved[ui]) continue;
       take(i);

@@ -31,7 +31,8 @@ struct FoldReference {
                                            // itself first
   int ring_size = 0;
   Points base, normals;                    // #P by 3, by slot: the stored base and its normals
-  std::vector<std::uint16_t> other_sheet;  // #P, by slot: members whose stored base normal faces away (n_i . n_j <= 0)
+  std::vector<std::uint16_t> other_sheet;  // #P, by slot: members whose stored base normal faces away (n_i . n_j <= 0),
+                                           // and bit 0 where the stored ring lies on a line (no plane test)
   std::vector<std::uint16_t> exempt;       // #P, by slot: edges (bit m) and planes (bit 0) that already fold in
                                            // the input, or empty: every fold counts
   std::vector<Index> in_offsets;           // #P + 1, and
@@ -55,6 +56,9 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input);
 //    edge (i, j). M_x (sum u u^T)^-1 is the least-squares Jacobian of the map from the
 //    stored base to x on the ring; the inverse only scales the cross product by a positive
 //    number, so the sign is read without it.
+// A ring that spreads along one line only (a strip of duplicated or collinear scan points, its
+// tangent spread across the line under 1e-3 of that along it) has no plane: it takes only the
+// crossing test.
 // Both are sign tests, a reversal counting once its cosine is below -1e-9 (a result and its
 // reference built in different coordinates differ by rounding, and an edge at right angles
 // must not flip between them). Where the result is the base itself each edge gives
