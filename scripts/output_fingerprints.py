@@ -20,6 +20,7 @@ The results depend on the thread count only where the engine's work split does, 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import hashlib
 import json
 import os
@@ -33,12 +34,15 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-DEFAULT_DATA = (REPO / ".." / "shared" / "data").resolve()
 FORMAT = 1
 
 sys.path.insert(0, str(REPO / "bench"))
 # The benchmark's own inputs, so that "unchanged on the benchmark inputs" means these clouds.
-from run import bumpy_sphere, in_order, read_ply_xyz  # noqa: E402
+from run import DEFAULT_DATA, bumpy_sphere, in_order, read_ply_xyz  # noqa: E402
+
+
+def diagonal_of(points: np.ndarray) -> float:
+    return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
 
 
 class Recorder:
@@ -53,9 +57,18 @@ class Recorder:
     def start_input(self, name: str, points: np.ndarray) -> None:
         """Entries added from now on belong to `name`; its diagonal scales --compare's differences."""
         self.prefix = name
-        diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
-        self.inputs[name] = {"points": int(len(points)), "diagonal": diagonal}
+        self.inputs[name] = {"points": int(len(points)), "diagonal": diagonal_of(points)}
         self.add("input", points)
+
+    @contextlib.contextmanager
+    def under(self, name: str):
+        """Entries added inside are named name/...: one operation's outputs on a second model."""
+        prefix = self.prefix
+        self.prefix = f"{prefix}/{name}"
+        try:
+            yield
+        finally:
+            self.prefix = prefix
 
     def add(self, name: str, value) -> None:
         key = f"{self.prefix}/{name}"
@@ -77,10 +90,6 @@ class Recorder:
 
 
 # --------------------------------------------------------------------------- operations
-
-
-def diagonal_of(points: np.ndarray) -> float:
-    return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
 
 
 def painted_gains(points: np.ndarray, bands: int) -> np.ndarray:
@@ -163,21 +172,20 @@ def record_reconstructions(rec: Recorder, ps, dec, points: np.ndarray, fold_gain
     rec.add("blend/t_1.5", ps.blend(dec, 1.5))
 
 
-def model_case(points_of, fold_gains=(2.0, 2.0, 1.0), surface_ops=True, **options):
-    """A case that decomposes one cloud and runs every operation on the model; with
-    surface_ops also estimate_normals and single-pass smoothing, which the benches time too."""
+def model_case(points_of, fold_gains=(2.0, 2.0, 1.0)):
+    """A case that decomposes one cloud as bench/run.py does and runs every operation on the
+    model, then estimate_normals and single-pass smoothing, which the benches time too."""
     def case(rec: Recorder, ps, threads: int, name: str) -> None:
         points = points_of()
         rec.start_input(name, points)
-        dec = ps.decompose(points, levels=4, threads=threads, **options)
+        dec = ps.decompose(points, levels=4, threads=threads)
         record_decomposition(rec, "decompose", dec)
         record_reconstructions(rec, ps, dec, points, fold_gains)
-        if surface_ops:
-            rec.add("estimate_normals/oriented", ps.estimate_normals(points, threads=threads))
-            rec.add("estimate_normals/unoriented", ps.estimate_normals(points, orient=False, threads=threads))
-            smoothed, normals = ps.project(points, points, kernel=2.5, single_pass=True, threads=threads)
-            rec.add("project_single_pass/points", smoothed)
-            rec.add("project_single_pass/normals", normals)
+        rec.add("estimate_normals/oriented", ps.estimate_normals(points, threads=threads))
+        rec.add("estimate_normals/unoriented", ps.estimate_normals(points, orient=False, threads=threads))
+        smoothed, normals = ps.project(points, points, kernel=2.5, single_pass=True, threads=threads)
+        rec.add("project_single_pass/points", smoothed)
+        rec.add("project_single_pass/normals", normals)
     return case
 
 
@@ -211,6 +219,7 @@ def operators_case(rec: Recorder, ps, threads: int, name: str) -> None:
     rec.add("smooth_diffusion/laplacian", ps.smooth_diffusion(points, 10, threads=threads))
     rec.add("smooth_diffusion/taubin", ps.smooth_diffusion(points, 10, taubin=True, threads=threads))
     rec.add("diffusion_levels", ps.diffusion_levels(points, 3, threads=threads))
+    rec.add("coarse_base_warning", ps.coarse_base_warning(4_000))
     hits, distances, missed = ps.shoot_rays(1.3 * points[::10], -points[::10], points, threads=threads)
     rec.add("shoot_rays/hits", hits)
     rec.add("shoot_rays/distances", distances)
@@ -232,8 +241,10 @@ def operators_case(rec: Recorder, ps, threads: int, name: str) -> None:
     rec.add("encode/reconstruct_half", ps.reconstruct(dec, [0.5]))
 
     other = ps.shapes.bumpy_sphere(15_000, coarse=0.05, coarse_frequency=4.0, fine=0.02, fine_frequency=12.0)
+    moved = 1.5 * other[:, [1, 2, 0]] + 0.2  # turned, scaled and shifted: alignment has work to do
     for tag, b, kwargs in (("common_base", other, {"base_points": ps.ellipsoid_base(points, other, n=5_000)}),
-                           ("align_pca", 1.5 * other[:, [1, 2, 0]] + 0.2, {"align": "pca", "base_samples": 5_000})):
+                           ("align_pca", moved, {"align": "pca", "base_samples": 5_000}),
+                           ("align_icp", moved, {"align": "icp", "base_samples": 5_000})):
         m = ps.morph(points, b, threads=threads, **kwargs)
         for key in ("base", "normals", "detail_a", "detail_b"):
             rec.add(f"morph_{tag}/{key}", getattr(m, key))
@@ -242,44 +253,16 @@ def operators_case(rec: Recorder, ps, threads: int, name: str) -> None:
         rec.add(f"morph_{tag}/evaluate_0_1", m.evaluate(0.0, 1.0))
 
 
-def options_case(rec: Recorder, ps, threads: int, name: str) -> None:
-    """decompose's options that take other paths: thin sheets, connected parts, a mirror, and
-    save/load. Each gets its own entries, all scaled by the plate's diagonal."""
+def sheets_case(rec: Recorder, ps, threads: int, name: str) -> None:
+    """Thin sheets kept apart (a bent two-sided plate), and a decomposition saved and loaded."""
     plate, plate_normals, _ = ps.shapes.thin_plate(bend=0.3)
     rec.start_input(name, plate)
     dec = ps.decompose(plate, levels=4, normals=plate_normals, sheets=True, threads=threads)
-    record_decomposition(rec, "sheets", dec)
-    rec.add("sheets/reconstruct_lift", ps.reconstruct(dec, base=local_lift(dec.base)))
+    record_decomposition(rec, "decompose", dec)
+    rec.add("reconstruct/lift", ps.reconstruct(dec, base=local_lift(dec.base)))
     pos, nrm = ps.project_sheets(plate, plate, onto_normals=plate_normals, threads=threads)
     rec.add("project_sheets/points", pos)
     rec.add("project_sheets/normals", nrm)
-
-    # A bumpy sphere with a small box beside it (tests/test_parts.py's first scene): two parts.
-    sphere, sphere_faces = ps.meshes.uv_sphere(1.0, 128, 64)
-    box, box_faces = ps.meshes.box(0.3, 16)
-    vertices, faces, _ = ps.meshes.joined((ps.meshes.bumpy(sphere, 0.01, 12), sphere_faces),
-                                          (box + [1.2, 0.0, 0.0], ps.meshes.quads_to_triangles(box_faces)))
-    labels, count = ps.parts.connected_parts(vertices, faces)
-    rec.add("connected_parts/labels", labels)
-    rec.add("connected_parts/count", int(count))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the box is meant to keep fewer levels: that path is fingerprinted
-        dec = ps.decompose(vertices, levels=4, faces=faces, threads=threads)
-    record_decomposition(rec, "parts", dec)
-    rec.add("parts/reconstruct_lift", ps.reconstruct(dec, base=local_lift(dec.base)))
-    rec.add("parts/reconstruct_gains", ps.reconstruct(dec, [1.0, 1.0, 2.0]))
-    dec = ps.encode(vertices, ps.ellipsoid_base(vertices, n=5_000), faces=faces, threads=threads)
-    record_decomposition(rec, "parts_encode", dec)
-
-    # The x >= 0 half of a bumpy UV sphere, decomposed with its mirror.
-    sphere = ps.meshes.bumpy(sphere, 0.08, 5.0)
-    sphere[np.abs(sphere[:, 0]) < 1e-12, 0] = 0.0  # cos(pi / 2) is 6e-17: put the seam on the plane
-    half = sphere[sphere[:, 0] >= 0.0]
-    dec = ps.decompose(half, levels=3, mirror=ps.Mirror("x"), threads=threads)
-    record_decomposition(rec, "mirror", dec)
-    record_reconstructions_under(rec, "mirror", ps, dec, half)
-
-    dec = ps.decompose(plate, levels=3, threads=threads)
     path = Path(os.environ.get("TMPDIR", "/tmp")) / f"output_fingerprints_{os.getpid()}.npz"
     try:
         dec.save(path)
@@ -290,14 +273,37 @@ def options_case(rec: Recorder, ps, threads: int, name: str) -> None:
     rec.add("load/reconstruct_lift", ps.reconstruct(loaded, base=local_lift(loaded.base)))
 
 
-def record_reconstructions_under(rec: Recorder, name: str, ps, dec, points: np.ndarray) -> None:
-    """record_reconstructions with its entries under `name`."""
-    prefix = rec.prefix
-    rec.prefix = f"{prefix}/{name}"
-    try:
-        record_reconstructions(rec, ps, dec, points, (2.0,) * dec.n_bands)
-    finally:
-        rec.prefix = prefix
+def parts_case(rec: Recorder, ps, threads: int, name: str) -> None:
+    """A bumpy sphere with a small box beside it (tests/test_parts.py's first scene): two
+    connected parts, decomposed and encoded each alone."""
+    sphere, sphere_faces = ps.meshes.uv_sphere(1.0, 128, 64)
+    box, box_faces = ps.meshes.box(0.3, 16)
+    vertices, faces, _ = ps.meshes.joined((ps.meshes.bumpy(sphere, 0.01, 12), sphere_faces),
+                                          (box + [1.2, 0.0, 0.0], ps.meshes.quads_to_triangles(box_faces)))
+    rec.start_input(name, vertices)
+    labels, count = ps.parts.connected_parts(vertices, faces)
+    rec.add("connected_parts/labels", labels)
+    rec.add("connected_parts/count", int(count))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the box is meant to keep fewer levels: that path is fingerprinted
+        dec = ps.decompose(vertices, levels=4, faces=faces, threads=threads)
+    record_decomposition(rec, "decompose", dec)
+    rec.add("reconstruct/lift", ps.reconstruct(dec, base=local_lift(dec.base)))
+    rec.add("reconstruct/gains", ps.reconstruct(dec, [1.0, 1.0, 2.0]))
+    dec = ps.encode(vertices, ps.ellipsoid_base(vertices, n=5_000), faces=faces, threads=threads)
+    record_decomposition(rec, "encode", dec)
+
+
+def mirror_case(rec: Recorder, ps, threads: int, name: str) -> None:
+    """The x >= 0 half of a bumpy UV sphere, decomposed with its mirror: every output goes
+    through the symmetrising path."""
+    sphere = ps.meshes.bumpy(ps.meshes.uv_sphere(1.0, 128, 64)[0], 0.08, 5.0)
+    sphere[np.abs(sphere[:, 0]) < 1e-12, 0] = 0.0  # cos(pi / 2) is 6e-17: put the seam on the plane
+    half = sphere[sphere[:, 0] >= 0.0]
+    rec.start_input(name, half)
+    dec = ps.decompose(half, levels=3, mirror=ps.Mirror("x"), threads=threads)
+    record_decomposition(rec, "decompose", dec)
+    record_reconstructions(rec, ps, dec, half, (8.0, 8.0))  # the least gains at which this half folds
 
 
 def cases(quick: bool, data: Path) -> list[tuple[str, object]]:
@@ -309,7 +315,8 @@ def cases(quick: bool, data: Path) -> list[tuple[str, object]]:
         for order in orders:
             label = f"sphere_{n // 1000}k_{'morton' if order == 'coherent' else order}"
             out.append((label, model_case(lambda n=n, order=order: in_order(bumpy_sphere(n), "synthetic", order))))
-    out += [("handles", handles_case), ("operators", operators_case), ("options", options_case)]
+    out += [("handles", handles_case), ("operators", operators_case), ("sheets", sheets_case),
+            ("parts", parts_case), ("mirror", mirror_case)]
     # bench/folds_bench.py's gains: Max Planck folds at (2, 2, 1), the dragon at (1, 1, 3).
     scans = [("max_planck.ply", (2.0, 2.0, 1.0))]
     if not quick:
@@ -431,7 +438,7 @@ def main(argv=None) -> int:
     parser.add_argument("--only", metavar="CASE,...", help="run only these cases (names as the run prints them)")
     parser.add_argument("--threads", type=int, default=2, help="threads for every call (default 2)")
     parser.add_argument("--arrays", metavar="DIR", help="also keep every array as DIR/<entry>.npy, for --compare's "
-                                                        "sizes of differences (about 3 GB for the full run)")
+                                                        "sizes of differences (about 4 GB for the full run)")
     args = parser.parse_args(argv)
     return compare(*args.compare) if args.compare else run(args)
 
