@@ -14,8 +14,8 @@ only and exits 1 if there are any, 0 when all match. --arrays DIR also keeps eve
 so that --compare can say by how much a float array moved (relative to its input's bounding-box
 diagonal) and how many of its values changed.
 
-The results depend on the thread count only where the engine's work split does, and on the CPU
-(the SIMD clones round differently): compare runs made on one machine with the same --threads.
+Two runs of one build on one machine give the same fingerprints, at --threads 1 and 2 alike. The
+CPU matters (the engine's SIMD clones round differently): compare runs made on one machine.
 """
 from __future__ import annotations
 
@@ -389,7 +389,7 @@ def run(args) -> int:
 
 def difference(a_run: dict, b_run: dict, key: str) -> str:
     """How far the arrays of `key` differ, when both runs kept them (--arrays)."""
-    dirs = [run.get("meta", {}).get("arrays") for run in (a_run, b_run)]
+    dirs = [r["meta"].get("arrays") for r in (a_run, b_run)]
     paths = [Path(d) / f"{key}.npy" for d in dirs if d]
     if len(paths) < 2 or not all(p.exists() for p in paths):
         return "(run both with --arrays DIR to see by how much)"
@@ -432,8 +432,8 @@ def main(argv=None) -> int:
     mode = parser.add_mutually_exclusive_group(required=True)
     mode.add_argument("--out", metavar="FILE.json", help="compute the fingerprints and write them here")
     mode.add_argument("--compare", nargs=2, metavar=("A.json", "B.json"), help="list the entries that differ")
-    parser.add_argument("--quick", action="store_true", help="100k sphere in Morton order and Max Planck only "
-                                                             "among the large inputs (under a minute on 2 cores)")
+    parser.add_argument("--quick", action="store_true", help="of the large inputs only the 100k sphere in "
+                                                             "Morton order and Max Planck (seconds, not minutes)")
     parser.add_argument("--data", default=str(DEFAULT_DATA), help="the scans' folder (default ../shared/data)")
     parser.add_argument("--only", metavar="CASE,...", help="run only these cases (names as the run prints them)")
     parser.add_argument("--threads", type=int, default=2, help="threads for every call (default 2)")
