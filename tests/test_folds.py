@@ -108,6 +108,27 @@ def test_prevention_leaves_no_folds_and_moves_only_points_near_them(folding_sphe
     assert np.all(t >= 0)
 
 
+@pytest.mark.parametrize("mode", ["report", "prevent"])
+@pytest.mark.parametrize("edited", [False, True])
+def test_a_reconstructor_reports_and_prevents_folds_as_reconstruct_does(folding_sphere, mode, edited):
+    dec = folding_sphere
+    rng = np.random.default_rng(1)
+    gains = np.asarray(GAINS, float)[:, None] * rng.uniform(0.5, 1.0, (dec.n_bands, dec.n_points))
+    base = dec.base + 0.01 * np.sin(4 * dec.base) if edited else None
+    solver = ps.Reconstructor(dec)
+    for fold_reference in ("input", "base"):
+        points, folds = ps.reconstruct(dec, gains, base, folds=mode, fold_reference=fold_reference)
+        got, got_folds = solver.reconstruct(gains, base, folds=mode, fold_reference=fold_reference)
+        assert np.array_equal(got, points)
+        assert folds.count_before > 0
+        for name in ("kind", "before", "limiter"):
+            assert np.array_equal(getattr(got_folds, name), getattr(folds, name)), name
+        assert (got_folds.rounds, got_folds.capped) == (folds.rounds, folds.capped)
+    assert isinstance(solver.reconstruct(gains, base), np.ndarray)
+    with pytest.raises(ValueError, match="folds must be one of"):
+        solver.reconstruct(gains, folds="yes")
+
+
 def test_the_limiter_is_smooth(folding_sphere):
     dec = folding_sphere
     folds = ps.reconstruct(dec, GAINS, folds="prevent")[1]

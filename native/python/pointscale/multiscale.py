@@ -563,10 +563,17 @@ def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None, fol
     _check_decomposition(dec)
     g = _gains_array(dec, gains)
     b = _base_array(dec, base)
-    from .folds import _fold_mode_option, _reference_option, with_folds
+    from .folds import _fold_mode_option, _reference_option
     mode = _fold_mode_option(folds)
     _reference_option(fold_reference)
     out = dec._model.reconstruct(g, b, False, -1, as_callback(progress), dec.origin, dec._buffers)
+    return _result_with_folds(dec, out, b, mode, fold_reference)
+
+
+def _result_with_folds(dec: Decomposition, out: np.ndarray, b, mode: str, fold_reference: str):
+    """A reconstruction of the whole model as reconstruct() returns it: the half's points, and
+    their Folds unless mode is "ignore"."""
+    from .folds import with_folds
     out = finite_result(out, "the reconstruction")
     if mode == "ignore":
         return dec._symmetric(out)
@@ -588,12 +595,17 @@ class Reconstructor:
         self._dec = dec
         self._core = _core.Reconstructor(dec._model)
 
-    def reconstruct(self, gains=None, base=None, *, progress=None) -> np.ndarray:
-        """As pointscale.reconstruct(dec, gains, base): the finest level, (n, 3)."""
+    def reconstruct(self, gains=None, base=None, *, progress=None, folds: str = "ignore",
+                    fold_reference: str = "input"):
+        """As pointscale.reconstruct(dec, gains, base, folds=..., fold_reference=...): the finest
+        level (n, 3), or (points, Folds) with folds "report" or "prevent"."""
+        from .folds import _fold_mode_option, _reference_option
         g = _gains_array(self._dec, gains)
         b = _base_array(self._dec, base)
-        return self._dec._symmetric(finite_result(self._core.reconstruct(g, b, as_callback(progress),
-                                                                         self._dec.origin), "the reconstruction"))
+        mode = _fold_mode_option(folds)
+        _reference_option(fold_reference)
+        out = self._core.reconstruct(g, b, as_callback(progress), self._dec.origin)
+        return _result_with_folds(self._dec, out, b, mode, fold_reference)
 
 
 def reconstruct_levels(dec: Decomposition, gains=None, base=None) -> np.ndarray:
