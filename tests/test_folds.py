@@ -149,6 +149,26 @@ def test_a_translated_base_adds_no_folds(folding_sphere):
     assert folds.count == 0 and np.array_equal(prevented, result)
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_folds_do_not_depend_on_where_the_result_and_its_base_stand(folding_sphere, seed):
+    # Both tests read only differences of positions, dot products and the sign of a cross
+    # product's dot: one rotation and translation of a result and its edited base together
+    # leaves every point's kinds as they were (up to the rounding guard, far from any of these).
+    dec = folding_sphere
+    rng = np.random.default_rng(seed)
+    centre = dec.base[rng.integers(dec.n_points)]
+    lifted = dec.base + 0.3 * np.exp(-((dec.base - centre) ** 2).sum(1) / 0.1)[:, None] * centre
+    result = ps.reconstruct(dec, GAINS, base=lifted)
+    q, _ = np.linalg.qr(rng.standard_normal((3, 3)))
+    q *= np.sign(np.linalg.det(q))                        # a rotation, not a reflection
+    shift = rng.uniform(-5, 5, 3)
+    for reference in ("input", "base"):
+        kind = ps.find_folds(dec, result, lifted, fold_reference=reference).kind
+        moved = ps.find_folds(dec, result @ q.T + shift, lifted @ q.T + shift, fold_reference=reference).kind
+        assert np.count_nonzero(kind) > 40                # measured 54-67
+        assert np.array_equal(kind, moved)
+
+
 def test_bad_fold_options_are_value_errors(folding_sphere):
     dec = folding_sphere
     with pytest.raises(ValueError, match="folds must be one of"):
