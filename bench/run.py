@@ -588,13 +588,14 @@ def results_markdown(rows: list[dict], meta: dict) -> str:
     (command, date, machine, revision, load), the input orders, and one row per input and order.
 
     meta: command, date, machine, revision, load_start, load_end, neighbors, levels, threads,
-    reps, recon_reps, and not_run (optional: a sentence per side that did not run, saying why)."""
+    reps, recon_reps, peers (which PCL and Open3D ran), and not_run (optional: a sentence per side that did not run, saying why)."""
     m = meta
     out = [RESULTS_BEGIN,
            f"Command: `{m['command']}`  ",
            f"Date: {m['date']}  ",
            f"Machine: {m['machine']}  ",
            f"pointscale: {m['revision']}  ",
+           f"Peers: {m['peers']}  ",
            f"Load average (1, 5, 15 min): {m['load_start']} at the start, {m['load_end']} at the end  ",
            "Input order: *Morton order* = the synthetic cloud sorted along a Z-order curve; *file order* = "
            "a scan as its file holds it; *shuffled* = either under one fixed random permutation "
@@ -610,7 +611,7 @@ def results_markdown(rows: list[dict], meta: dict) -> str:
         if r.get("ps_timeout") and faster_peer(r)[1]:
             ratio_cell = f"> {r['ps_timeout'] / faster_peer(r)[1]:.0f}"
         else:
-            ratio_cell = "n/a" if ratio is None else f"{ratio:.2f} ({SIDE_NAMES[side]})"
+            ratio_cell = "n/a" if ratio is None else f"{ratio:.2f}, {SIDE_NAMES[side]}"
         cpu_cell = "n/a"
         if side and ps.get("cpu_s") is not None and (r.get(side) or {}).get("cpu_s"):
             cpu_cell = f"{ps['cpu_s'] / r[side]['cpu_s']:.2f}"
@@ -807,6 +808,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             print("PCL peer:", peer.relative_to(REPO))
     o3d_modes: list[str] = []
+    o3d_version = "?"
     o3d_why = "skipped (--no-open3d)"
     if not args.no_open3d:
         chk = subprocess.run([sys.executable, "-c",
@@ -823,6 +825,7 @@ def main(argv: list[str] | None = None) -> int:
             o3d_why = f"open3d {words[0] if words else '?'} has no PointCloud.smooth_mls"
         else:
             o3d_modes = ["radius", "knn"] if args.open3d_search == "both" else [args.open3d_search]
+            o3d_version = words[0]
             print(f"Open3D peer: open3d {words[0]}, PointCloud.smooth_mls ({' and '.join(o3d_modes)} search), "
                   f"OMP_NUM_THREADS={args.threads}")
         if not o3d_modes:
@@ -997,6 +1000,9 @@ def main(argv: list[str] | None = None) -> int:
             "load_start": load_start, "load_end": ", ".join(open("/proc/loadavg").read().split()[:3]),
             "neighbors": args.neighbors, "levels": args.levels, "threads": args.threads,
             "reps": args.reps, "recon_reps": args.recon_reps,
+            "peers": ", ".join((["PCL MovingLeastSquares (bench/peers/pcl_mls)"] if peer is not None else []) +
+                               ([f"Open3D {o3d_version} ({' and '.join(o3d_modes)} search)"] if o3d_modes else []))
+                     or "none",
             "not_run": ([f"pointscale did not run: {ps_why}"] if not have_ps else []) +
                        ([f"PCL did not run: {pcl_why}"] if peer is None else []) +
                        ([f"Open3D did not run: {o3d_why}"] if not o3d_modes else [])}))
