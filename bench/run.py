@@ -5,6 +5,7 @@
     python bench/run.py --quick         # small smoke test (20k synthetic only)
     python bench/run.py --sizes 100k,1M --no-pcl --no-open3d
     python bench/run.py --huge          # also a 10M-point synthetic cloud
+    python bench/run.py --results bench/RESULTS.md   # also write the table there, in markdown
 
 Every input is timed in two orders (--orders):
   coherent  the order a real input comes in, each peer's best case: file order for the
@@ -459,14 +460,14 @@ def peer_ratio(r: dict) -> tuple[float | None, str | None]:
     return ((a / b) if (a is not None and b) else None), side
 
 
-def time_cell(r: dict, side: str, args: argparse.Namespace) -> str:
+def time_cell(r: dict, side: str, reps: int, spec: str = ".3f") -> str:
     if r.get(side + "_timeout"):
         return f"> {r[side + '_timeout']:.0f} (timeout)"
     res = r.get(side)
     if not res:
         return "FAILED" if r.get(side + "_err") else "n/a"
-    cell = f"{res['wall_s']:.3f}"
-    if len(res["all_s"]) < args.reps:
+    cell = format(res["wall_s"], spec)
+    if len(res["all_s"]) < reps:
         cell += f" ({len(res['all_s'])} run{'s' if len(res['all_s']) > 1 else ''})"
     return cell
 
@@ -509,7 +510,7 @@ def render(rows: list[dict], args: argparse.Namespace) -> str:
             cpu_cell = (f"{ps['cpu_s'] / r[side]['cpu_s']:.2f} "
                         f"({ps['cpu_s']:.2f} / {r[side]['cpu_s']:.2f})")
         out.append(f"| {r['name']} | {r['order_label']} | " +
-                   " | ".join(time_cell(r, sd, args) for sd in SIDES) +
+                   " | ".join(time_cell(r, sd, args.reps) for sd in SIDES) +
                    f" | {SIDE_NAMES[side] if side else 'n/a'} | {ratio_cell} | {cpu_cell} |")
 
     out += ["", "| input | order | K | PCL radius / mean nbrs | reconstruct median / first (ms) "
@@ -576,6 +577,92 @@ def verdicts(rows: list[dict]) -> list[str]:
         lines.append(f"{size_label(r['n'])} decompose, {r['order_label']}: "
                      f"{'completed' if ok else 'FAILED: ' + str(r.get('ps_err'))}")
     return lines
+
+
+RESULTS_BEGIN = "<!-- bench/run.py --results: begin (generated; run the command again, do not edit) -->"
+RESULTS_END = "<!-- bench/run.py --results: end -->"
+
+
+def results_markdown(rows: list[dict], meta: dict) -> str:
+    """The one results table, in markdown, between RESULTS_BEGIN and RESULTS_END: what ran
+    (command, date, machine, revision, load), the input orders, and one row per input and order.
+
+    meta: command, date, machine, revision, load_start, load_end, neighbors, levels, threads,
+    reps, recon_reps, peers (which PCL and Open3D ran), and not_run (optional: a sentence per side that did not run, saying why)."""
+    m = meta
+    out = [RESULTS_BEGIN,
+           f"Command: `{m['command']}`  ",
+           f"Date: {m['date']}  ",
+           f"Machine: {m['machine']}  ",
+           f"pointscale: {m['revision']}  ",
+           f"Peers: {m['peers']}  ",
+           f"Load average (1, 5, 15 min): {m['load_start']} at the start, {m['load_end']} at the end  ",
+           "Input order: *Morton order* = the synthetic cloud sorted along a Z-order curve; *file order* = "
+           "a scan as its file holds it; *shuffled* = either under one fixed random permutation "
+           f"(seed {SHUFFLE_SEED}).",
+           "",
+           "| input | points | order | pointscale decompose (s) | PCL MLS (s) | Open3D smooth_mls, radius (s) "
+           "| Open3D smooth_mls, kNN (s) | pointscale / faster peer | CPU-time ratio "
+           "| reconstruct / Reconstructor (ms) | both on a moved base (ms) | peak memory (B/point) |",
+           "|" + "|".join(["---"] * 12) + "|"]
+    for r in rows:
+        ps = r.get("ps") or {}
+        ratio, side = peer_ratio(r)
+        if r.get("ps_timeout") and faster_peer(r)[1]:
+            ratio_cell = f"> {r['ps_timeout'] / faster_peer(r)[1]:.0f}"
+        else:
+            ratio_cell = "n/a" if ratio is None else f"{ratio:.2f}, {SIDE_NAMES[side]}"
+        cpu_cell = "n/a"
+        if side and ps.get("cpu_s") is not None and (r.get(side) or {}).get("cpu_s"):
+            cpu_cell = f"{ps['cpu_s'] / r[side]['cpu_s']:.2f}"
+        recon = ("n/a" if ps.get("reconstruct_median_ms") is None else
+                 f"{ps['reconstruct_median_ms']:.1f} / " +
+                 ("n/a" if ps.get("reconstructor_median_ms") is None else
+                  f"{ps['reconstructor_median_ms']:.1f}" + ("" if ps.get("reconstructor_identical") else " (DIFFERS)")))
+        moved = ("n/a" if ps.get("reconstruct_moved_median_ms") is None else
+                 f"{ps['reconstruct_moved_median_ms']:.1f} / {ps['reconstructor_moved_median_ms']:.1f}")
+        out.append(f"| {r['name']} | {r['n']:,} | {r['order_label']} | " +
+                   " | ".join(time_cell(r, sd, m["reps"], ".2f") for sd in SIDES) +
+                   f" | {ratio_cell} | {cpu_cell} | {recon} | {moved} | {fmt(ps.get('peak_bytes_per_point'), '.0f')} |")
+    out += ["",
+            f"Every time is the median of {m['reps']} interleaved round{'s' if m['reps'] != 1 else ''}, each pass "
+            "in a fresh process that builds its own index (fewer where a cell says so). pointscale decompose: "
+            f"`decompose(points, levels={m['levels']}, neighbors={m['neighbors']}, threads={m['threads']})`. "
+            f"PCL: `MovingLeastSquares`, order 1, radius calibrated to a mean of {m['neighbors']} neighbours, "
+            f"{m['threads']} threads, `process()` only. Open3D: `PointCloud.smooth_mls` with PCL's radius and with "
+            f"KNN({m['neighbors']}), OMP_NUM_THREADS={m['threads']}. Faster peer: the smallest of the three peer "
+            "times on that row. CPU-time ratio: user + system CPU seconds, all threads, pointscale over that peer. "
+            f"reconstruct: `reconstruct(dec, base=dec.base)` and `Reconstructor(dec).reconstruct(base=...)`, "
+            f"medians of {m['recon_reps']} alternating calls in the first round's process; moved base: both on a "
+            "base a broad wave moved everywhere. Peak memory: peak RSS (VmHWM) minus the RSS after loading the "
+            "points, during the first round's decompose, per input point."
+            + "".join(f" {what}." for what in m.get("not_run", [])),
+            RESULTS_END]
+    return "\n".join(out)
+
+
+def check_results_file(path: Path) -> str | None:
+    """Why --results cannot write to path (None when it can): an existing file must hold the
+    markers, so that only the table between them is replaced and the rest is kept."""
+    if not path.exists():
+        return None
+    text = path.read_text()
+    if RESULTS_BEGIN not in text or RESULTS_END not in text:
+        return (f"{path} exists without the markers {RESULTS_BEGIN!r} and {RESULTS_END!r}: "
+                "add them where the table goes, or give a new file")
+    return None
+
+
+def write_results(path: Path, block: str) -> None:
+    """Writes the table into path: between the markers of an existing file (the rest kept), or a
+    new file holding only a title and the table."""
+    if path.exists():
+        text = path.read_text()
+        head, rest = text.split(RESULTS_BEGIN, 1)
+        tail = rest.split(RESULTS_END, 1)[1]
+        path.write_text(head + block + tail)
+    else:
+        path.write_text("# Benchmark results\n\n" + block + "\n")
 
 
 def core_revision() -> str:
@@ -650,6 +737,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--rep-budget", type=float, default=60.0,
                    help="stop repeating a side on an input once its passes took this many s (default 60)")
     p.add_argument("--json", type=Path, help="also write all raw results to this file")
+    p.add_argument("--results", type=Path, metavar="FILE.md",
+                   help="also write the results table in markdown, with the command, date, machine and "
+                        "input orders: between the markers of an existing file (bench/RESULTS.md), or "
+                        "into a new one")
     p.add_argument("--worker-pointscale", help=argparse.SUPPRESS)
     p.add_argument("--worker-open3d", help=argparse.SUPPRESS)
     p.add_argument("--o3d-search", default="knn", help=argparse.SUPPRESS)
@@ -660,6 +751,13 @@ def main(argv: list[str] | None = None) -> int:
         return worker_pointscale(args)
     if args.worker_open3d:
         return worker_open3d(args)
+
+    if args.results:
+        why = check_results_file(args.results)
+        if why:
+            p.error(why)
+    started = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    load_start = ", ".join(open("/proc/loadavg").read().split()[:3])
 
     if args.morton:
         args.orders = ["coherent"]
@@ -710,6 +808,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             print("PCL peer:", peer.relative_to(REPO))
     o3d_modes: list[str] = []
+    o3d_version = "?"
     o3d_why = "skipped (--no-open3d)"
     if not args.no_open3d:
         chk = subprocess.run([sys.executable, "-c",
@@ -726,6 +825,7 @@ def main(argv: list[str] | None = None) -> int:
             o3d_why = f"open3d {words[0] if words else '?'} has no PointCloud.smooth_mls"
         else:
             o3d_modes = ["radius", "knn"] if args.open3d_search == "both" else [args.open3d_search]
+            o3d_version = words[0]
             print(f"Open3D peer: open3d {words[0]}, PointCloud.smooth_mls ({' and '.join(o3d_modes)} search), "
                   f"OMP_NUM_THREADS={args.threads}")
         if not o3d_modes:
@@ -892,6 +992,21 @@ def main(argv: list[str] | None = None) -> int:
         args.json.write_text(json.dumps({"machine": machine_line(), "argv": sys.argv[1:],
                                          "rows": rows}, indent=1))
         print(f"\nraw results: {args.json}")
+    if args.results:
+        write_results(args.results, results_markdown(rows, {
+            "command": "python bench/run.py" + ("" if not sys.argv[1:] else " " + " ".join(sys.argv[1:])),
+            "date": started, "machine": machine_line(),
+            "revision": f"the repository at {core_revision()}" if have_ps else ps_why,
+            "load_start": load_start, "load_end": ", ".join(open("/proc/loadavg").read().split()[:3]),
+            "neighbors": args.neighbors, "levels": args.levels, "threads": args.threads,
+            "reps": args.reps, "recon_reps": args.recon_reps,
+            "peers": ", ".join((["PCL MovingLeastSquares (bench/peers/pcl_mls)"] if peer is not None else []) +
+                               ([f"Open3D {o3d_version} ({' and '.join(o3d_modes)} search)"] if o3d_modes else []))
+                     or "none",
+            "not_run": ([f"pointscale did not run: {ps_why}"] if not have_ps else []) +
+                       ([f"PCL did not run: {pcl_why}"] if peer is None else []) +
+                       ([f"Open3D did not run: {o3d_why}"] if not o3d_modes else [])}))
+        print(f"results table: {args.results}")
     return 0
 
 
