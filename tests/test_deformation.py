@@ -65,4 +65,5 @@ def test_an_unedited_explicit_base_gives_the_default_reconstruction(n):
     points = ps.shapes.bumpy_sphere(n)
     dec = ps.decompose(points, levels=4)
     diagonal = np.linalg.norm(np.ptp(points, axis=0))
-    assert np.abs(ps.reconstruct(dec, base=dec.base.copy()) - ps.reconstruct(dec)).max() <= 1e-9 * diagonal
+    # Near, not equal: the base given back is rounded by the centring (measured 6.4e-17).
+    assert np.abs(ps.reconstruct(dec, base=dec.base.copy()) - ps.reconstruct(dec)).max() <= 1e-13 * diagonal

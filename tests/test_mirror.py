@@ -90,7 +90,7 @@ def test_the_half_is_the_symmetric_average_of_the_whole_model(half, mirrored):
 
 def test_unit_gains_return_the_input(half, mirrored):
     points, _, _ = half
-    assert np.abs(ps.reconstruct(mirrored) - points).max() <= 1e-6 * diagonal(points)
+    assert np.abs(ps.reconstruct(mirrored) - points).max() <= 1e-11 * diagonal(points)  # measured 2.6e-15
     assert np.abs(mirrored.level(3) - points).max() <= 2e-14 * diagonal(points)  # measured 2.6e-15
 
 
@@ -150,7 +150,7 @@ def test_two_planes():
         for l in range(dec.n_levels):
             assert plane_offsets(dec.level(l), on, axis).max() <= bound, (axis, l)
         assert plane_offsets(ps.reconstruct(dec, [2.0, 2.0]), on, axis).max() <= bound
-    assert np.abs(ps.reconstruct(dec) - points).max() <= 1e-6 * diagonal(points)
+    assert np.abs(ps.reconstruct(dec) - points).max() <= 1e-11 * diagonal(points)  # measured 2.6e-15
 
 
 def test_points_near_the_plane_are_snapped_onto_it(half):
