@@ -137,7 +137,8 @@ def test_a_thin_closed_slab_is_outward_on_both_faces(k):
     # 2.5 spacings thick: every point's k nearest reach the other face, whose normals are
     # antiparallel and so look like good agreements to 1 - |n_i . n_j|. The spanning tree over
     # all 24 neighbours took such a shortcut and turned half the slab inward.
-    points, normals = shapes._box_surface(np.array([1.0, 0.8, 0.025]), 0.02)
+    points, normals, outer = shapes.thin_walled_box((2.0, 1.6, 0.05), spacing=0.02)
+    points, normals = points[outer], normals[outer]  # the slab's own surface, 1.0 x 0.8 x 0.025 half-sizes
     assert (np.einsum("ij,ij->i", oriented(points, k), normals) > 0).all()
 
 
