@@ -21,7 +21,6 @@ from scipy.spatial import cKDTree
 
 import pointscale as ps
 from pointscale import _core, shapes
-from pointscale._checks import centre
 from helpers import shared_model
 
 
@@ -116,9 +115,16 @@ def prim_orientation(points, normals, k):
     return out
 
 
+def centre(points):
+    """The bounding-box centre, which the engine subtracts before it estimates normals."""
+    return 0.5 * (points.min(axis=0) + points.max(axis=0))
+
+
 def oriented(points, k=16, width=None):
     if width is None:
         return ps.estimate_normals(points, neighbors=k)
+    # No public API takes the tree's width: the core's own entry point, on centred points as
+    # estimate_normals passes them.
     return _core.estimate_normals(points - centre(points), k, True, width)
 
 
