@@ -6,7 +6,6 @@ bpy scripts can call them directly; they are safe to run in a worker thread.
 
 from __future__ import annotations
 
-import inspect
 import weakref
 from dataclasses import dataclass
 
@@ -29,38 +28,26 @@ class Layout:
         return self.levels.shape[0]
 
 
+# The panel's names of the smoother and the encoding, which .blend recipes keep, and the engine's.
+SMOOTHERS = {"MLS": "mls", "DIFFUSION": "diffusion"}
+ENCODINGS = {"PROJECTION": "projection", "RAY": "rayshoot"}
+
+
 def decompose_kwargs(ps, levels=4, decimation=0.25, kernel=1.0, neighbors=24, threads=0,
                      smoother="MLS", encoding="PROJECTION") -> dict:
-    """Keyword arguments for :func:`decompose`; raises ValueError for a method this engine lacks."""
-    kw = dict(levels=int(levels), decimation=float(decimation), kernel=float(kernel),
-              neighbors=int(neighbors), threads=int(threads), smoother=smoother, encoding=encoding)
-    decompose_function(ps, smoother, encoding)  # fail early, on the main thread
-    return kw
+    """Keyword arguments for :func:`decompose` from the panel's settings. ``ps`` is not used; it
+    stays for the callers that pass it (bench/blender_bench.py)."""
+    if smoother not in SMOOTHERS or encoding not in ENCODINGS:
+        raise ValueError(f"unknown smoother {smoother!r} or encoding {encoding!r}")
+    return dict(levels=int(levels), decimation=float(decimation), kernel=float(kernel),
+                neighbors=int(neighbors), threads=int(threads), smoother=smoother, encoding=encoding)
 
 
-def decompose_function(ps, smoother="MLS", encoding="PROJECTION"):
-    """(engine function, extra kwargs) for a smoother (MLS, DIFFUSION) and encoding (PROJECTION, RAY).
-
-    Projection encoding is ``ps.decompose`` (Sec. 7); ray shooting (Sec. 6.1) is
-    ``ps.decompose_rayshoot``, which also offers the diffusion smoother (Sec. 5.1).
-    """
-    smoother_arg = {"MLS": "mls", "DIFFUSION": "diffusion"}[smoother]
-    params = inspect.signature(ps.decompose).parameters
-    if encoding == "RAY" and "encoding" in params:
-        extra = {"encoding": "rayshoot"}
-        if smoother != "MLS":
-            extra["smoother"] = smoother_arg
-        return ps.decompose, extra
-    if encoding == "RAY":
-        fn = getattr(ps, "decompose_rayshoot", None)
-        if fn is None:
-            raise ValueError("this pointscale engine has no ray-shooting encoding (decompose_rayshoot) yet")
-        return fn, {"smoother": smoother_arg}
-    if smoother == "MLS":
-        return ps.decompose, {}
-    if "smoother" in params:
-        return ps.decompose, {"smoother": smoother_arg}
-    raise ValueError("the Diffusion smoother needs the Ray Shooting encoding in this pointscale engine")
+def run_decompose(ps, points: np.ndarray, smoother="MLS", encoding="PROJECTION", **kwargs):
+    """``ps.decompose`` with the panel's smoother (MLS, DIFFUSION) and encoding (PROJECTION:
+    Sec. 7; RAY: ray shooting, Sec. 6.1)."""
+    return ps.decompose(np.asarray(points, dtype=np.float64), smoother=SMOOTHERS[smoother],
+                        encoding=ENCODINGS[encoding], **kwargs)
 
 
 def decompose(ps, points: np.ndarray, progress=None, smoother="MLS", encoding="PROJECTION", **kwargs) -> Layout:
@@ -68,11 +55,10 @@ def decompose(ps, points: np.ndarray, progress=None, smoother="MLS", encoding="P
     problem = logic.check_points(points)
     if problem:
         raise ValueError(problem)
-    fn, extra = decompose_function(ps, smoother, encoding)
     # The engine's warning as data: catching warnings is not thread-safe, and this runs on a
     # worker thread while the UI (and other jobs) go on.
     levels_asked, decimation = kwargs.get("levels", 4), kwargs.get("decimation", 0.25)
-    dec = fn(np.asarray(points, dtype=np.float64), progress=progress, **kwargs, **extra)
+    dec = run_decompose(ps, points, smoother, encoding, progress=progress, **kwargs)
     parts = dec.parts or []
     largest = max((part["points"] for part in parts), default=len(points))
     messages = [ps.coarse_base_warning(largest, levels_asked, decimation)]

@@ -36,14 +36,6 @@ def error() -> str | None:
     return _error
 
 
-def has(name: str) -> bool:
-    return available() and hasattr(_engine, name)
-
-
 def cancelled_type():
-    """The engine's cancellation exception (or a type that never matches)."""
-    return getattr(get(), "Cancelled", _NeverRaised)
-
-
-class _NeverRaised(Exception):
-    pass
+    """The engine's cancellation exception, which a cancelled progress callback raises."""
+    return get().Cancelled

@@ -20,13 +20,11 @@ __all__ = [
     "band_key_data",
     "evaluate_keys",
     "per_point_gains",
-    "gains_from_values",
     "detail_colors",
     "split_float64",
     "join_float64",
     "pack_decomposition",
     "unpack_decomposition",
-    "ellipsoid_points",
     "check_points",
     "levels_that_fit",
 ]
@@ -78,11 +76,6 @@ def evaluate_keys(basis, keys, values, weights=None) -> np.ndarray:
 
 
 # ---------------------------------------------------------------- gains
-
-def gains_from_values(values) -> np.ndarray:
-    """Band key values (gain - 1) -> gains."""
-    return np.asarray(values, dtype=np.float64) + 1.0
-
 
 def per_point_gains(values, weights, n: int) -> np.ndarray | None:
     """Gains of the painted-mask filter (Fig. 10b) as the core expects them.
@@ -225,23 +218,7 @@ def unpack_decomposition(columns_get, extras: dict, meta: dict, n: int) -> dict:
     return out
 
 
-# ---------------------------------------------------------------- morph / input
-
-def ellipsoid_points(lo, hi, n: int = 20000) -> np.ndarray:
-    """Points on the largest axis-aligned ellipsoid in the box [lo, hi] (Fig. 8-9 base).
-
-    Fibonacci sampling of the unit sphere, scaled; used only when the engine
-    has no ``ellipsoid_base``.
-    """
-    lo = np.asarray(lo, dtype=np.float64)
-    hi = np.asarray(hi, dtype=np.float64)
-    i = np.arange(n, dtype=np.float64) + 0.5
-    z = 1.0 - 2.0 * i / n
-    r = np.sqrt(np.maximum(0.0, 1.0 - z * z))
-    phi = i * np.pi * (3.0 - np.sqrt(5.0))
-    unit = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
-    return (lo + hi) * 0.5 + unit * (hi - lo) * 0.5
-
+# ---------------------------------------------------------------- input
 
 def check_points(points: np.ndarray, minimum: int = 4) -> str | None:
     """A clear message when ``points`` cannot be decomposed, else None.

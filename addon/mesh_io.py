@@ -5,15 +5,6 @@ from __future__ import annotations
 import numpy as np
 
 
-def _key_seq(kb):
-    # ShapeKey.points (4.1+) is the lightweight accessor; .data is the old one.
-    return kb.points if hasattr(kb, "points") else kb.data
-
-
-def vertex_count(mesh) -> int:
-    return len(mesh.vertices)
-
-
 def read_vertices(mesh) -> np.ndarray:
     n = len(mesh.vertices)
     co = np.empty(n * 3, dtype=np.float32)
@@ -55,15 +46,15 @@ def read_imported_normals(mesh) -> np.ndarray | None:
 
 
 def read_key(kb) -> np.ndarray:
-    seq = _key_seq(kb)
-    n = len(seq)
+    # ShapeKey.points (Blender 4.1+): the lightweight accessor, without .data's per-point extras.
+    n = len(kb.points)
     co = np.empty(n * 3, dtype=np.float32)
-    seq.foreach_get("co", co)
+    kb.points.foreach_get("co", co)
     return co.reshape(n, 3)
 
 
 def write_key(kb, co: np.ndarray) -> None:
-    _key_seq(kb).foreach_set("co", np.ascontiguousarray(co, dtype=np.float32).reshape(-1))
+    kb.points.foreach_set("co", np.ascontiguousarray(co, dtype=np.float32).reshape(-1))
 
 
 def read_basis(mesh) -> np.ndarray:
@@ -71,16 +62,6 @@ def read_basis(mesh) -> np.ndarray:
     if mesh.shape_keys is not None and mesh.shape_keys.reference_key is not None:
         return read_key(mesh.shape_keys.reference_key)
     return read_vertices(mesh)
-
-
-def read_evaluated(obj, depsgraph) -> np.ndarray:
-    """Positions of the evaluated mesh (shape keys, masks and modifiers applied)."""
-    ev = obj.evaluated_get(depsgraph)
-    me = ev.to_mesh()
-    try:
-        return read_vertices(me)
-    finally:
-        ev.to_mesh_clear()
 
 
 def read_group_weights(obj, group_names, n: int) -> list:

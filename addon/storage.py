@@ -147,9 +147,7 @@ def _decompose_again(mesh, engine, recipe: dict, threads: int):
     if "mirror" in recipe:
         kwargs["mirror"] = engine.Mirror(recipe["mirror"]["axes"], tuple(recipe["mirror"]["origin"]),
                                          recipe["mirror"]["seam"])
-    smoother, encoding = kwargs.pop("smoother", "MLS"), kwargs.pop("encoding", "PROJECTION")
-    fn, extra = compute.decompose_function(engine, smoother, encoding)
-    dec = fn(np.asarray(points, dtype=np.float64), **kwargs, **extra)
+    dec = compute.run_decompose(engine, points, **kwargs)  # the recipe's smoother and encoding too
     saved = [mesh_io.read_attribute(mesh, f"{DETAIL}{l}", "FLOAT") if mesh.attributes.get(f"{DETAIL}{l}") is not None else None
              for l in range(dec.n_bands)]
     band = recipes.changed_band(dec.details, saved) if dec.n_bands == int(mesh[PROP]["k"]) else 0

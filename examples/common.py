@@ -9,11 +9,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import struct
 import sys
 import tempfile
 import time
-import zlib
 from pathlib import Path
 
 import bpy
@@ -429,7 +427,7 @@ class _quiet:
         return False
 
 
-# ----------------------------------------------------------------------------- composing and PNG
+# ----------------------------------------------------------------------------- composing and saving
 
 
 def label(text: str, width: int, size: int = 13, height: int | None = None) -> np.ndarray:
@@ -489,39 +487,21 @@ def stack(rows) -> np.ndarray:
 
 
 def write_png(path, rgb: np.ndarray) -> int:
-    """8-bit PNG (greyscale when the image has no colour), best of the five row filters per row,
-    zlib level 9. Returns the file size."""
-    a = np.clip(np.round(np.asarray(rgb)[..., :3] * 255), 0, 255).astype(np.uint8)
-    spread = a.max(axis=2).astype(int) - a.min(axis=2)
-    grey = spread.max() <= 2
-    if grey:
-        a = a.mean(axis=2, dtype=np.float32).round().astype(np.uint8)[..., None]
-    h, w, c = a.shape
-    rows = a.reshape(h, w * c).astype(np.int16)
-    prev = np.vstack([np.zeros((1, w * c), np.int16), rows[:-1]])
-    left = np.hstack([np.zeros((h, c), np.int16), rows[:, :-c]])
-    upleft = np.hstack([np.zeros((h, c), np.int16), prev[:, :-c]])
-    p = left + prev - upleft
-    pa, pb, pc = np.abs(p - left), np.abs(p - prev), np.abs(p - upleft)
-    paeth = np.where((pa <= pb) & (pa <= pc), left, np.where(pb <= pc, prev, upleft))
-    candidates = [rows, rows - left, rows - prev, rows - (left + prev) // 2, rows - paeth]
-    filtered = [(f % 256).astype(np.uint8) for f in candidates]
-    cost = np.stack([np.abs(f.astype(np.int8).astype(np.int16)).sum(axis=1) for f in filtered])
-    best = cost.argmin(axis=0)
-    raw = np.empty((h, 1 + w * c), np.uint8)
-    raw[:, 0] = best
-    for k in range(5):
-        sel = best == k
-        raw[sel, 1:] = filtered[k][sel]
-    colour_type = 0 if grey else 2
-
-    def chunk(tag, data):
-        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
-
-    png = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, colour_type, 0, 0, 0))
-    png += chunk(b"IDAT", zlib.compress(raw.tobytes(), 9)) + chunk(b"IEND", b"")
-    Path(path).write_bytes(png)
-    return len(png)
+    """(h, w, 3) float RGB in [0, 1] as an 8-bit PNG, by Blender's own image writer (the one the
+    renders come from). Returns the file size."""
+    a = np.clip(np.asarray(rgb, dtype=np.float32)[..., :3], 0.0, 1.0)
+    h, w = a.shape[:2]
+    rgba = np.concatenate([a, np.ones((h, w, 1), np.float32)], axis=2)[::-1]  # Blender's rows run bottom up
+    # A byte image: its pixels are written to the file as they are, with no colour transform.
+    img = bpy.data.images.new("pointscale_png", w, h, alpha=False, float_buffer=False)
+    try:
+        img.pixels.foreach_set(np.ascontiguousarray(rgba).reshape(-1))
+        img.filepath_raw = str(path)
+        img.file_format = "PNG"
+        img.save()
+    finally:
+        bpy.data.images.remove(img)
+    return Path(path).stat().st_size
 
 
 def save(args, name: str, image: np.ndarray) -> Path:

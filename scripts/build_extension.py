@@ -3,6 +3,7 @@
 
     python scripts/build_extension.py            # wheels + zip + validate
     python scripts/build_extension.py --no-wheel # reuse dist/wheels (fast)
+    python scripts/build_extension.py --if-stale # only what is older than addon/ and native/
 
 Steps:
 1. ``pip wheel . --no-deps`` builds an engine wheel for each interpreter:
@@ -28,6 +29,9 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import extension_freshness  # noqa: E402  (its sibling: is dist/ current?)
 
 ROOT = Path(__file__).resolve().parents[1]
 DIST = ROOT / "dist"
@@ -196,6 +200,7 @@ def build_wheels(pythons: list[str]) -> None:
              "--only-binary=:all:", "-d", tmp])
         for whl in Path(tmp).glob("plyfile-*.whl"):
             shutil.copy2(whl, WHEELS / whl.name)
+    extension_freshness.write_stamp()
 
 
 # Blender's platform names for the engine wheels' platform tags.
@@ -251,6 +256,9 @@ def stage(manifest_text: str) -> Path:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--no-wheel", action="store_true", help="reuse the wheels already in dist/wheels")
+    ap.add_argument("--if-stale", action="store_true",
+                    help="build only when dist/ has no zip of addon/ and native/ as they are now (and reuse "
+                         "the wheels when they are current)")
     ap.add_argument("--python", action="append", default=None,
                     help="interpreter(s) to build engine wheels with, repeatable "
                          "(default: this one and setup.sh's .venv / .venv313)")
@@ -259,8 +267,18 @@ def main() -> int:
     manifest_text = (ROOT / "blender_manifest.toml").read_text()
     ext_id = manifest_field(manifest_text, "id")
     version = manifest_field(manifest_text, "version")
-    if not args.no_wheel:
-        build_wheels(args.python or default_pythons())
+    wheels = not args.no_wheel
+    pythons = (args.python or default_pythons()) if wheels or args.if_stale else []
+    if args.if_stale:
+        tags = [ask(py, "import sys; print('cp%d%d' % sys.version_info[:2])") for py in pythons]
+        problem = extension_freshness.stale_reason(tags)
+        if problem is None:
+            print(f"{extension_freshness.newest_zip().relative_to(ROOT)} is current: nothing to build", flush=True)
+            return 0
+        print(f"building, as {problem}", flush=True)
+        wheels = wheels and extension_freshness.wheel_problem(tags) is not None
+    if wheels:
+        build_wheels(pythons)
     src = stage(manifest_text)
     tool = blender_ext()
     for old in glob.glob(str(DIST / f"{ext_id}-{version}*.zip")):

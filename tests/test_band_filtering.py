@@ -60,4 +60,5 @@ def test_gain_two_on_last_band_doubles_fine(sphere_decomposition):
 
 def test_unit_gains_keep_both_patterns(sphere_decomposition):
     p, dec = sphere_decomposition
-    np.testing.assert_allclose(ps.reconstruct(dec, [1.0, 1.0, 1.0]), p, atol=1e-9)
+    # A round trip, to 1e-11 of the diagonal (measured 7e-16).
+    assert np.abs(ps.reconstruct(dec, [1.0, 1.0, 1.0]) - p).max() <= 1e-11 * np.linalg.norm(np.ptp(p, axis=0))

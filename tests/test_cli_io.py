@@ -341,7 +341,7 @@ def test_demo_runs_and_writes_its_files(tmp_path):
 def test_scanned_bunny_round_trips():
     model = read_ply(shared_model("bunny.ply"))
     dec = ps.decompose(model.points, levels=4)
-    assert np.abs(ps.reconstruct(dec) - model.points).max() <= 1e-6 * diagonal(model.points)
+    assert np.abs(ps.reconstruct(dec) - model.points).max() <= 1e-11 * diagonal(model.points)  # measured 2.7e-13
 
 
 @pytest.mark.parametrize("extension", [".ply", ".las", ".laz", ".obj", ".off", ".stl", ".xyz", ".pts", ".e57"])

@@ -64,7 +64,7 @@ def test_level_blend_moves_along_normals(gallery):
 
 def test_spectral_filter_round_trip_and_band_gains(gallery):
     fig = numbers(gallery[0], "fig07_spectral_filter")
-    assert fig["round_trip_max_error_percent"] < 1e-6
+    assert fig["round_trip_max_error_percent"] < 1e-9  # 1e-11 of the diagonal; measured 3.9e-11 %
     # gains (1,1,3) move twice as far as (1,1,2): the last band scaled by 2 versus 1
     assert fig["gains (1, 1, 3): rms change % of diagonal"] == pytest.approx(
         2 * fig["gains (1, 1, 2): rms change % of diagonal"], rel=0.02)
@@ -72,7 +72,7 @@ def test_spectral_filter_round_trip_and_band_gains(gallery):
 
 def test_morph_endpoint_returns_the_first_model(gallery):
     fig = numbers(gallery[0], "fig09_morph")
-    assert fig["alpha1_beta0_max_error_percent_of_diagonal"] < 1e-6
+    assert fig["alpha1_beta0_max_error_percent_of_diagonal"] < 1e-9  # measured 7.5e-15 %
 
 
 def test_painted_gains_leave_unpainted_vertices_alone(gallery):

@@ -21,7 +21,6 @@ from scipy.spatial import cKDTree
 
 import pointscale as ps
 from pointscale import _core, shapes
-from pointscale._checks import centre
 from helpers import shared_model
 
 
@@ -116,9 +115,16 @@ def prim_orientation(points, normals, k):
     return out
 
 
+def centre(points):
+    """The bounding-box centre, which the engine subtracts before it estimates normals."""
+    return 0.5 * (points.min(axis=0) + points.max(axis=0))
+
+
 def oriented(points, k=16, width=None):
     if width is None:
         return ps.estimate_normals(points, neighbors=k)
+    # No public API takes the tree's width: the core's own entry point, on centred points as
+    # estimate_normals passes them.
     return _core.estimate_normals(points - centre(points), k, True, width)
 
 
@@ -137,7 +143,8 @@ def test_a_thin_closed_slab_is_outward_on_both_faces(k):
     # 2.5 spacings thick: every point's k nearest reach the other face, whose normals are
     # antiparallel and so look like good agreements to 1 - |n_i . n_j|. The spanning tree over
     # all 24 neighbours took such a shortcut and turned half the slab inward.
-    points, normals = shapes._box_surface(np.array([1.0, 0.8, 0.025]), 0.02)
+    points, normals, outer = shapes.thin_walled_box((2.0, 1.6, 0.05), spacing=0.02)
+    points, normals = points[outer], normals[outer]  # the slab's own surface, 1.0 x 0.8 x 0.025 half-sizes
     assert (np.einsum("ij,ij->i", oriented(points, k), normals) > 0).all()
 
 

@@ -80,8 +80,6 @@ def _prepare(op, context):
         planes = _mirror_planes(obj, points)
         op._mirror_note = None
         if planes is not None:
-            if not hasattr(ps, "Mirror"):
-                raise ValueError("this pointscale engine has no mirror symmetry; turn off Use Mirror Modifier")
             kwargs["mirror"] = ps.Mirror(planes.axes, planes.origin, planes.seam)
             op._mirror_note = f"symmetric about {planes.describe()}"
     except ValueError as exc:
@@ -95,7 +93,7 @@ def _computed(ps, points, kwargs, progress=None):
     keys' float32 arrays and the recipe (the Basis the engine saw and its settings, which the
     .blend keeps to decompose again)."""
     layout = compute.decompose(ps, points, progress=progress, **kwargs)
-    return layout, writeback.key_data(layout, points, kwargs, getattr(ps, "__version__", ""))
+    return layout, writeback.key_data(layout, points, kwargs, ps.__version__)
 
 
 class POINTSCALE_OT_decompose(bpy.types.Operator):

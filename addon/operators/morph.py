@@ -20,8 +20,6 @@ def morph_problem(context):
     problem = state.mesh_object_problem(obj) or state.engine_problem()
     if problem:
         return problem
-    if not engine.has("morph"):
-        return "Morph needs pointscale.morph(), which this engine version does not have yet"
     s = obj.data.multiscale
     target = s.morph_target or next(
         (o for o in context.selected_objects if o is not obj and o.type == "MESH"), None

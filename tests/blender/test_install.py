@@ -6,6 +6,7 @@ Runs in a subprocess with its own BLENDER_USER_RESOURCES (a fresh user folder), 
 the developer's editable engine there, so only the zip's wheel can satisfy ``import pointscale``.
 """
 
+import importlib.util
 import json
 import os
 import re
@@ -13,7 +14,6 @@ import subprocess
 import sys
 import tomllib
 import zipfile
-from pathlib import Path
 
 import pytest
 
@@ -51,31 +51,21 @@ print("RESULT" + json.dumps(out))
 # This Python's engine wheel tag: the zip must bundle it for this Blender to install it.
 CP = f"cp{sys.version_info.major}{sys.version_info.minor}"
 
-
-def _zip_is_current(path: Path) -> bool:
-    with zipfile.ZipFile(path) as z:
-        names = set(z.namelist())
-        if not any(re.fullmatch(rf"wheels/pointscale-[^/]*-{CP}-[^/]*\.whl", n) for n in names):
-            return False
-        for src in (ROOT / "addon").rglob("*.py"):
-            rel = src.relative_to(ROOT / "addon").as_posix()
-            if rel not in names or z.read(rel) != src.read_bytes():
-                return False
-    return True
+# scripts/extension_freshness.py: is dist/'s zip the one addon/ and native/ make now?
+_spec = importlib.util.spec_from_file_location("extension_freshness", ROOT / "scripts" / "extension_freshness.py")
+freshness = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(freshness)
 
 
 @pytest.fixture(scope="module")
 def built_zip():
-    zips = sorted((ROOT / "dist").glob("pointscale-*-linux_x64.zip"))
-    if not zips or not _zip_is_current(zips[-1]):
-        # A fresh clone has no wheels yet: build them too (for every Python that setup.sh set up,
-        # so the bpy 5.2 run reuses this zip), never skip.
-        have_wheel = bool(list((ROOT / "dist" / "wheels").glob(f"pointscale-*-{CP}-*.whl")))
-        build = subprocess.run([sys.executable, str(ROOT / "scripts" / "build_extension.py")]
-                               + (["--no-wheel"] if have_wheel else []), capture_output=True, text=True)
-        assert build.returncode == 0, build.stdout[-3000:] + build.stderr[-3000:]
-        zips = sorted((ROOT / "dist").glob("pointscale-*-linux_x64.zip"))
-    return zips[-1]
+    # The zip is built by a step of its own (scripts/test.sh and .ci/run run it before pytest),
+    # not here: a missing or old zip fails, never skips, so that no run passes without checking it.
+    problem = freshness.stale_reason([CP])
+    if problem:
+        pytest.fail(f"{problem}: run `{freshness.BUILD}` first (./scripts/test.sh runs it, then the tests)",
+                    pytrace=False)
+    return freshness.newest_zip()
 
 
 def test_zip_installs_and_decomposes(built_zip, tmp_path):

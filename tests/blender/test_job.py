@@ -1,79 +1,15 @@
-"""The worker behind the modal Decompose: the UI thread keeps running, Esc cancels cleanly.
+"""The modal Decompose's operator without a window (tests/test_addon_job.py tests its worker,
+addon/job.py, without Blender)."""
 
-Modal operators do not run in background mode, so this drives the same Job object that the
-modal operator polls from its timer.
-"""
-
-import importlib
-import time
-
-import numpy as np
+import bpy
 import pytest
 
-from blender_helpers import ADDON_NAME
+import blender_helpers as h
 
 pytestmark = pytest.mark.blender
 
 
-@pytest.fixture(scope="module")
-def big_cloud():
-    import pointscale as ps
-
-    return ps.shapes.bumpy_sphere(120000)
-
-
-def _job_module(addon):
-    return importlib.import_module(ADDON_NAME + ".job"), importlib.import_module(ADDON_NAME + ".compute")
-
-
-def test_main_thread_runs_while_decomposing(addon, big_cloud):
-    import pointscale as ps
-
-    job_mod, compute = _job_module(addon)
-    job = job_mod.Job(lambda progress: compute.decompose(ps, big_cloud, progress=progress, levels=4),
-                      cancelled_type=ps.Cancelled).start()
-    ticks, fractions = 0, set()
-    while job.running:
-        ticks += 1  # pure-Python work on the "UI" thread
-        fractions.add(round(job.fraction, 2))
-        time.sleep(0.005)
-    assert job.error is None and not job.cancelled
-    assert job.result.levels.shape == (3, len(big_cloud), 3)
-    assert ticks > 20, "the main thread was starved: is the GIL released?"
-    assert len(fractions) >= 3  # progress was reported along the way
-
-
-def test_cancel_stops_early_and_drops_the_result(addon, big_cloud):
-    import pointscale as ps
-
-    job_mod, compute = _job_module(addon)
-    job = job_mod.Job(lambda progress: compute.decompose(ps, big_cloud, progress=progress, levels=4),
-                      cancelled_type=ps.Cancelled).start()
-    while job.running and job.fraction < 0.05:
-        time.sleep(0.002)
-    t0 = time.perf_counter()
-    job.cancel()
-    assert job.wait(timeout=30)
-    stop = time.perf_counter() - t0
-    assert job.cancelled and job.result is None and job.error is None
-    assert stop < 5.0, f"cancel took {stop:.1f} s"
-
-
-def test_errors_are_handed_to_the_main_thread(addon):
-    import pointscale as ps
-
-    job_mod, compute = _job_module(addon)
-    bad = np.zeros((10, 3))
-    job = job_mod.Job(lambda progress: compute.decompose(ps, bad, progress=progress), cancelled_type=ps.Cancelled)
-    job.start().wait()
-    assert isinstance(job.error, ValueError) and not job.cancelled
-
-
 def test_invoke_without_a_window_runs_synchronously():
-    import bpy
-
-    import blender_helpers as h
-
     obj = h.mesh_object(h.noisy_sphere(4000))
     assert bpy.ops.pointscale.decompose("INVOKE_DEFAULT") == {"FINISHED"}
     assert obj.data.multiscale.n_bands == 3

@@ -81,16 +81,6 @@ def _check_morph(A, B, a, b, b_tolerance):
     return M
 
 
-def test_morph_poll_explains_a_missing_engine_function(monkeypatch):
-    import pointscale as ps
-
-    monkeypatch.delattr(ps, "morph", raising=False)
-    A, B, a, b = _two_models()
-    assert not bpy.ops.pointscale.morph.poll()
-    with pytest.raises(RuntimeError, match="morph"):
-        bpy.ops.pointscale.morph()
-
-
 def test_morph_operator_wiring(monkeypatch):
     import pointscale as ps
 
@@ -100,10 +90,6 @@ def test_morph_operator_wiring(monkeypatch):
 
 
 def test_morph_with_the_engine():
-    import pointscale as ps
-
-    if not hasattr(ps, "morph"):
-        pytest.skip("pointscale.morph is not in the engine yet (engine-breadth issue)")
     A, B, a, b = _two_models()
     _check_morph(A, B, a, b, b_tolerance=0.01)
 

@@ -1,18 +1,16 @@
-"""The add-on's pure-NumPy functions (no Blender needed, but they ship with it)."""
-
-import importlib
+"""The add-on's pure-NumPy functions (addon/logic.py, addon/compute.py), tested without Blender:
+they ship with the add-on but need only NumPy and the engine."""
 
 import numpy as np
 import pytest
 
-from blender_helpers import ADDON_NAME
-
-pytestmark = pytest.mark.blender
+import pointscale as ps
+from addon_modules import addon_module
 
 
 @pytest.fixture(scope="module")
-def logic(addon):
-    return importlib.import_module(ADDON_NAME + ".logic")
+def logic():
+    return addon_module("logic")
 
 
 def test_level_key_values_are_hat_weights(logic):
@@ -99,13 +97,11 @@ def test_check_points(logic):
     assert "shape" in logic.check_points(np.zeros((10, 2)))
 
 
-def test_decompose_warnings_come_from_the_job_not_from_other_threads(addon):
+def test_decompose_warnings_come_from_the_job_not_from_other_threads():
     import threading
     import warnings
 
-    import pointscale as ps
-
-    compute = importlib.import_module(f"{ADDON_NAME}.compute")
+    compute = addon_module("compute")
     points = ps.shapes.bumpy_sphere(3000)
     result = {}
     worker = threading.Thread(target=lambda: result.setdefault("layout", compute.decompose(ps, points, levels=4)))
@@ -120,8 +116,6 @@ def test_decompose_warnings_come_from_the_job_not_from_other_threads(addon):
 
 
 def test_levels_that_fit_a_small_mesh_say_what_to_do(logic):
-    import pointscale as ps
-
     # Suzanne: 507 vertices, 4 levels at 0.25 need 512
     levels, message = logic.levels_that_fit(507, 4, 0.25, 8)
     assert levels == 3
@@ -136,3 +130,16 @@ def test_levels_that_fit_a_small_mesh_say_what_to_do(logic):
     assert logic.levels_that_fit(300, 5, 0.25, 8)[0] == 3  # 300 * 0.25**2 = 18.75 >= 8
     with pytest.raises(ValueError, match="even 2 levels"):
         logic.levels_that_fit(20, 4, 0.25, 8)
+
+
+def test_the_pure_modules_import_without_bpy():
+    # In a fresh interpreter where `import bpy` fails: the modules above must not need it.
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = ("import sys; sys.modules['bpy'] = None; sys.path.insert(0, sys.argv[1]); "
+            "from addon_modules import addon_module; "
+            "[addon_module(m) for m in ('logic', 'compute', 'recipe', 'job', 'mirror_modifier')]")
+    proc = subprocess.run([sys.executable, "-c", code, str(Path(__file__).parent)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[-2000:]
