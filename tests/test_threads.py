@@ -139,8 +139,91 @@ def test_reconstruct_from_several_threads_on_one_decomposition_gives_each_its_ow
     base = dec.base * 1.1
     gains = [np.array([1.0, g, 2.0 - g]) for g in np.linspace(0.0, 2.0, 8)]
     # Without the kept arrays, straight from the model:
-    expected = [dec._model.reconstruct(g, base, False, -1, None, dec.origin) for g in gains]
+    expected = [dec._reconstruct(g, base) for g in gains]
     with ThreadPoolExecutor(4) as pool:
         results = list(pool.map(lambda g: ps.reconstruct(dec, gains=g, base=base), gains * 3))
     for i, got in enumerate(results):
         assert np.array_equal(got, expected[i % len(gains)])
+
+
+def _max_threads_seen_during(call):
+    """The most threads this process had, sampled every millisecond while call() ran."""
+    seen = [_threads_of_this_process()]
+    stop = threading.Event()
+
+    def sampler():
+        while not stop.is_set():
+            seen.append(_threads_of_this_process())
+            time.sleep(0.001)
+
+    t = threading.Thread(target=sampler)
+    t.start()
+    try:
+        call()
+    finally:
+        stop.set()
+        t.join()
+    return max(seen)
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="needs two cores")
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="counts threads through Linux's /proc")
+def test_a_thread_count_holds_for_its_own_call_only(big):
+    # threads=1 once stayed set for every later call of the process, such as reconstruct(),
+    # which takes no thread count of its own.
+    dec = ps.decompose(big[:100000], levels=3)
+    ps.estimate_normals(big[:20000], threads=1)
+    before = _threads_of_this_process()
+    # `before` counts the main thread; the sampler adds one, a core worker one more.
+    assert _max_threads_seen_during(lambda: ps.reconstruct(dec, base=dec.base * 1.01)) >= before + 2
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="needs two cores")
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="counts threads through Linux's /proc")
+def test_two_threads_calling_at_once_keep_their_own_thread_counts(big):
+    # Thread A decomposes with threads=1 and pauses in its first progress report while thread
+    # B projects with threads=2; then A goes on. A's call must stay on A's own thread: while
+    # A's later reports run, the process has only the threads it had before plus A. The
+    # reports come from the calling thread in the middle of each parallel loop, while that
+    # loop's workers are alive, so a worker A started would be counted. Nothing else runs then
+    # (B has been joined, and A waits for its system thread to be gone), and a count that is
+    # right never adds a thread, so this cannot fail by chance.
+    before = _threads_of_this_process()
+    a_started, b_joined = threading.Event(), threading.Event()
+    after_b = []  # thread counts seen in A's reports once B has finished
+    errors = []
+
+    def progress_a(fraction):
+        if not a_started.is_set():
+            a_started.set()
+            assert b_joined.wait(300), "thread B did not finish"
+            deadline = time.monotonic() + 5.0
+            while _threads_of_this_process() > before + 1 and time.monotonic() < deadline:
+                time.sleep(0.001)  # B's system thread ends just after join() returns
+        after_b.append(_threads_of_this_process())
+        return True
+
+    def run_a():
+        try:
+            ps.decompose(big, levels=3, threads=1, progress=progress_a)
+        except BaseException as exc:  # reported by the main thread
+            errors.append(exc)
+        finally:
+            a_started.set()
+
+    def run_b():
+        try:
+            assert a_started.wait(300), "thread A did not start"
+            ps.project(big[:100000], big[::3], threads=2)
+        except BaseException as exc:
+            errors.append(exc)
+
+    a, b = threading.Thread(target=run_a), threading.Thread(target=run_b)
+    a.start()
+    b.start()
+    b.join()
+    b_joined.set()
+    a.join()
+    assert not errors, errors
+    assert len(after_b) > 10, len(after_b)  # A reported often enough to have seen a worker
+    assert max(after_b) == before + 1, (before, after_b)

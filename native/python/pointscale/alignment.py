@@ -56,7 +56,7 @@ def nearest_indices(onto: np.ndarray, points: np.ndarray) -> np.ndarray:
     """The index of each point's nearest point of `onto`: the core's k-nearest interpolation of
     the indices themselves, with one neighbour (its weight is then the whole)."""
     values = np.arange(len(onto), dtype=np.float64)
-    return np.rint(_core.knn_interpolate(onto, values, points, 1)).astype(np.int64)
+    return np.rint(_core.knn_interpolate(onto, values, points, k=1)).astype(np.int64)
 
 
 def _mean_distance(a: np.ndarray, b: np.ndarray) -> float:

@@ -8,7 +8,7 @@ import numpy as np
 
 from . import _core
 from ._checks import (MAX_GAIN, MAX_ITERATIONS, MAX_NEIGHBORS, as_callback, as_normals_of, as_points, centre,
-                      finite_result, kernel_option, positive, require_near, require_surface, set_threads)
+                      finite_result, kernel_option, positive, require_near, require_surface, thread_option)
 from .multiscale import MIN_COARSE_POINTS
 
 #: Below this overlap of A's and B's bounding boxes (intersection over union) morph warns:
@@ -117,9 +117,11 @@ def _morph_where_they_lie(a, b, base_points, *, base_normals, kernel, neighbors,
     max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
     bn = as_normals_of(base_normals, s, "base_normals", "base_points")
     origin = centre(np.vstack([a, b, s]))
-    set_threads(threads)
-    r = _core.morph(a - origin, b - origin, s - origin, bn, kernel, neighbors, tolerance, max_iterations, k,
-                    as_callback(progress))
+    options = _core.MorphOptions(
+        kernel=kernel, interpolation_neighbors=k,
+        mls=_core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations))
+    r = _core.morph(a - origin, b - origin, s - origin, base_normals=bn, options=options,
+                    progress=as_callback(progress), threads=thread_option(threads))
     for key in ("base", "normals", "detail_a", "detail_b"):
         finite_result(r[key], f"the morph's {key.replace('_', ' ')}")
     return Morph(r["base"] + origin, r["normals"], r["detail_a"], r["detail_b"],

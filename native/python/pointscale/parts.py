@@ -236,7 +236,7 @@ def _frozen_parts(p, normals, frozen, k, neighbors, kernel_scale, origin, base, 
     m = len(idx)
     base[idx] = points - origin
     base_normals[idx] = _part_normals(points, part, len(frozen), None if normals is None else normals[idx])
-    rows = _core.knn_within_parts(points, part, neighbors).astype(np.int64)
+    rows = _core.knn_within_parts(points, part, k=neighbors).astype(np.int64)
     own = np.arange(m)
     for l in range(k):
         labels[l, idx] = offsets[l] + own
