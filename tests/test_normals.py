@@ -20,7 +20,7 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components, mini
 from scipy.spatial import cKDTree
 
 import pointscale as ps
-from pointscale import _core, shapes
+from pointscale import _testing, shapes
 from pointscale._checks import centre
 from helpers import shared_model
 
@@ -119,7 +119,7 @@ def prim_orientation(points, normals, k):
 def oriented(points, k=16, width=None):
     if width is None:
         return ps.estimate_normals(points, neighbors=k)
-    return _core.estimate_normals(points - centre(points), k, True, width)
+    return _testing.oriented_normals(points - centre(points), k, width)
 
 
 # ------------------------------------------------------------------ synthetic, in code

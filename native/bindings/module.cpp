@@ -17,11 +17,9 @@
 #include "pointscale/single_pass.h"
 #include "pointscale/normal_estimation.h"
 #include "pointscale/oriented_normals.h"
-#include "pointscale/parallel.h"
 #include "pointscale/reconstruction.h"
 #include "pointscale/reconstructor.h"
 #include "pointscale/sample_spacing.h"
-#include "pointscale/self_knn.h"
 #include "pointscale/spatial_order.h"
 #include "bindings.h"
 
@@ -36,24 +34,6 @@ Eigen::MatrixXd to_gains(const DoubleArray& gains) {
   if (gains.ndim() < 1 || gains.ndim() > 2) throw std::invalid_argument("gains must be (k,) or (k, n)");
   return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
       gains.data(), gains.shape(0), gains.ndim() == 2 ? gains.shape(1) : 1);
-}
-
-// (#P by k indices, #P by k squared distances) of every point's k nearest among `points`,
-// which fill(index, rows, distances) writes straight into the NumPy arrays (no copy to time).
-template <class Fill>
-py::tuple knn_rows(const DoubleArray& points, int k, int threads, const Fill& fill) {
-  Points p = to_points(points);
-  if (k < 1 || k > p.rows()) throw py::value_error("k must be between 1 and the number of points");
-  const std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(p.rows()), k};
-  py::array_t<Index> nearest(shape);
-  py::array_t<double> d2(shape);
-  Index* rows = nearest.mutable_data();
-  double* dist = d2.mutable_data();
-  without_gil(threads, [&] {
-    fill(SpatialIndex(p), rows, dist);
-    return 0;
-  });
-  return py::make_tuple(nearest, d2);
 }
 
 py::dict report_dict(const LevelReport& r) {
@@ -284,7 +264,6 @@ PYBIND11_MODULE(_core, m) {
   // Folds of a result over its base (folds.h). result and base come in the package's world
   // coordinates; origin is the decomposition's (the stored base is model.base + origin).
   py::class_<FoldReference>(m, "FoldReference", "What a model's folds are measured against (folds.h).")
-      .def_property_readonly("exempting", [](const FoldReference& r) { return !r.exempt.empty(); })
       .def_property_readonly("rings", [](const FoldReference& r) {
         // Point by point, as point indices (the reference keeps them by slot).
         const std::size_t n = r.other_sheet.size(), w = static_cast<std::size_t>(r.ring_size);
@@ -428,36 +407,13 @@ PYBIND11_MODULE(_core, m) {
     return py::make_tuple(c.centroids, to_array(c.labels));
   }, py::arg("points"), py::arg("target"), py::arg("max_variation"), py::arg("threads") = 0);
 
-  // width: the orientation graph's (oriented_normals), for tests and bench/normals_bench.py;
-  // estimate_normals in Python leaves it at its default.
-  m.def("estimate_normals", [](const DoubleArray& points, int neighbors, bool orient, int width, int threads) {
+  m.def("estimate_normals", [](const DoubleArray& points, int neighbors, bool orient, int threads) {
     Points p = to_points(points);
     return without_gil(threads, [&] {
-      if (orient) return oriented_normals(std::move(p), neighbors, width);
+      if (orient) return oriented_normals(std::move(p), neighbors, orientation_width);
       return pca_normals(SpatialIndex(std::move(p)), neighbors);
     });
-  }, py::arg("points"), py::arg("neighbors"), py::arg("orient"), py::arg("width") = orientation_width,
-     py::arg("threads") = 0);
-
-  // Every point's k nearest among the points themselves (the rows decompose's kNN passes
-  // use), for tests against a brute-force search, and the same rows from a kd-tree query per
-  // point (what self_knn replaced), for bench/knn_bench.py.
-  m.def("self_knn", [](const DoubleArray& points, int k, int threads) {
-    return knn_rows(points, k, threads, [&](const SpatialIndex& index, Index* rows, double* dist) {
-      self_knn(index, k, [&](Index i, const Index* idx, const double* d, int found) {
-        std::copy(idx, idx + found, rows + static_cast<std::size_t>(i) * k);
-        std::copy(d, d + found, dist + static_cast<std::size_t>(i) * k);
-      });
-    });
-  }, py::arg("points"), py::arg("k"), py::arg("threads") = 0);
-  m.def("kdtree_knn", [](const DoubleArray& points, int k, int threads) {
-    return knn_rows(points, k, threads, [&](const SpatialIndex& index, Index* rows, double* dist) {
-      parallel_for(static_cast<std::size_t>(index.size()), [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i)
-          index.knn(index.points().row(static_cast<Eigen::Index>(i)).data(), k, rows + i * k, dist + i * k);
-      });
-    });
-  }, py::arg("points"), py::arg("k"), py::arg("threads") = 0);
+  }, py::arg("points"), py::arg("neighbors"), py::arg("orient"), py::arg("threads") = 0);
 
   bind_operators(m);
 }
