@@ -223,8 +223,8 @@ PYBIND11_MODULE(_core, m) {
           return out;
         });
         if (!keep_levels) return py::object(py::cast(std::move(r.positions)));
-        // Each array moved into its NumPy owner, not copied: 2k + 1 arrays of n x 3 (at 100k
-        // points and 4 levels, copying them took about as long as the reconstruction).
+        // Each array moved into its NumPy owner, not copied: 2k + 1 arrays of n x 3, which would
+        // cost about as much to copy as to compute.
         py::list levels, normals;
         for (Points& level : r.levels) levels.append(py::cast(std::move(level)));
         for (Points& level_normals : r.normals) normals.append(py::cast(std::move(level_normals)));
@@ -274,11 +274,9 @@ PYBIND11_MODULE(_core, m) {
         return to_array(rings, {static_cast<py::ssize_t>(n), r.ring_size});
       });
   m.def("fold_reference", [](const MultiscaleModel& s, py::object input, int threads) {
-    Points in;
-    const bool has_input = !input.is_none();
-    if (has_input) in = to_points(input.cast<DoubleArray>());
-    if (has_input && in.rows() != s.base.rows()) throw std::invalid_argument("input must be (n, 3)");
-    return without_gil(threads, [&] { return fold_reference(s, has_input ? &in : nullptr); });
+    const OptionalPoints in(input);
+    if (in.present && in.p.rows() != s.base.rows()) throw std::invalid_argument("input must be (n, 3)");
+    return without_gil(threads, [&] { return fold_reference(s, in.get()); });
   }, py::arg("model"), py::arg("input") = py::none(), py::arg("threads") = 0);
 
   m.def("find_folds", [](const MultiscaleModel& s, const FoldReference& ref, const DoubleArray& result,
@@ -286,13 +284,11 @@ PYBIND11_MODULE(_core, m) {
     const Eigen::Index n = s.base.rows();
     require_reference(ref, n);
     if (result.ndim() != 2 || result.shape(0) != n || result.shape(1) != 3) throw std::invalid_argument("result must be (n, 3)");
-    Points edited;
-    const bool has_base = !base.is_none();
-    if (has_base) edited = to_points(base.cast<DoubleArray>());
-    if (has_base && edited.rows() != n) throw std::invalid_argument("base must be (n, 3)");
+    const OptionalPoints edited(base);
+    if (edited.present && edited.p.rows() != n) throw std::invalid_argument("base must be (n, 3)");
     const Eigen::Map<const Points> r(result.data(), n, 3);
     std::vector<std::uint8_t> kind;
-    without_gil(threads, [&] { find_folds(s, ref, has_base ? &edited : nullptr, r, kind); });
+    without_gil(threads, [&] { find_folds(s, ref, edited.get(), r, kind); });
     return to_array(kind, {static_cast<py::ssize_t>(n)});
   }, py::arg("model"), py::arg("reference"), py::arg("result"), py::arg("base") = py::none(),
      py::arg("threads") = 0);
@@ -308,16 +304,14 @@ PYBIND11_MODULE(_core, m) {
       throw std::invalid_argument("result must be a writable C-contiguous float64 (n, 3) array");
     if (max_rounds < 0 || max_rounds > 1000) throw std::invalid_argument("max_rounds must be in 0..1000");
     if (smoothing < 0 || smoothing > 64) throw std::invalid_argument("smoothing must be in 0..64");
-    Points edited;
-    const bool has_base = !base.is_none();
-    if (has_base) edited = to_points(base.cast<DoubleArray>());
-    if (has_base && edited.rows() != n) throw std::invalid_argument("base must be (n, 3)");
+    const OptionalPoints edited(base);
+    if (edited.present && edited.p.rows() != n) throw std::invalid_argument("base must be (n, 3)");
     const Vec3 o = to_origin(origin);
     Eigen::Map<Points> r(result.mutable_data(), n, 3);
     FoldLimitOptions options;
     options.max_rounds = max_rounds;
     options.smoothing = smoothing;
-    FoldLimitReport rep = without_gil(threads, [&] { return limit_folds(s, ref, has_base ? &edited : nullptr, o, r, options); });
+    FoldLimitReport rep = without_gil(threads, [&] { return limit_folds(s, ref, edited.get(), o, r, options); });
     const py::ssize_t count = static_cast<py::ssize_t>(n);
     py::dict d;
     d["before"] = to_array(rep.before, {count});

@@ -422,7 +422,7 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     if faces is not None or edges is not None:
         from .parts import connected_parts
         p = as_points(points)
-        labels, count = connected_parts(p, faces, edges)
+        labels, count = connected_parts(p, faces, edges, threads=threads)
         if count > 1:
             options = dict(decimation=decimation, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
                            max_iterations=max_iterations, max_variation=max_variation, smoother=smoother,

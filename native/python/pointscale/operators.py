@@ -175,7 +175,7 @@ def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neigh
     """
     if faces is not None or edges is not None:
         from .parts import connected_parts
-        labels, count = connected_parts(as_points(points), faces, edges)
+        labels, count = connected_parts(as_points(points), faces, edges, threads=threads)
         if count > 1:
             options = dict(base_normals=base_normals, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
                            max_iterations=max_iterations, max_variation=max_variation, threads=threads)

@@ -50,19 +50,19 @@ def connectivity_pairs(n: int, faces=None, edges=None) -> np.ndarray | None:
     return np.ascontiguousarray(pairs, dtype=np.int32)
 
 
-def connected_parts(points, faces=None, edges=None) -> tuple[np.ndarray, int]:
+def connected_parts(points, faces=None, edges=None, *, threads: int = 0) -> tuple[np.ndarray, int]:
     """The parts that faces or edges connect: (labels (n,) int32, count).
 
     Parts are numbered in the order of their lowest vertex in a face or edge. A vertex in no
     face or edge (a scan's untriangulated point) joins the part of its nearest vertex that is
-    in one; with no faces and no edges everything is one part.
+    in one; with no faces and no edges everything is one part. threads: as decompose's.
     """
-    from ._checks import as_points
+    from ._checks import as_points, thread_option
     p = as_points(points)
     pairs = connectivity_pairs(len(p), faces, edges)
     if pairs is None:
         return np.zeros(len(p), dtype=np.int32), 1
-    labels, count = _core.connected_parts(p, pairs)
+    labels, count = _core.connected_parts(p, pairs, threads=thread_option(threads))
     return labels, int(count)
 
 
