@@ -74,9 +74,10 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_sam
     if align not in METHODS:
         raise ValueError(f"align must be one of {', '.join(METHODS)}, got {align!r}")
     a, b = as_points(points_a, "points_a"), as_points(points_b, "points_b")
+    threads = thread_option(threads)
     placement = None
     if align != "none":
-        carry = similarity(b, a, align)
+        carry = similarity(b, a, align, threads=threads)
         b, placement = carry.apply(b), carry.inverse()
     if base_points is None:
         from .operators import ellipsoid_base
@@ -92,7 +93,7 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_sam
     result = None
     if any(c is not None for c in (faces_a, edges_a, faces_b, edges_b)):
         from .parts_onto_base import matched_parts, morph_by_part
-        labels_a, labels_b, count = matched_parts(a, b, faces_a, edges_a, faces_b, edges_b)
+        labels_a, labels_b, count = matched_parts(a, b, faces_a, edges_a, faces_b, edges_b, threads)
         if count > 1:
             def morph_one(ia, ib, part_progress):
                 return _morph_where_they_lie(a[ia], b[ib], base_points, progress=part_progress, **options)
