@@ -508,7 +508,8 @@ def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> 
             return decompose(points, part_levels, normals=part_normals, progress=part_progress, **options)
 
     arrays, stats, reports = decompose_parts(p, n_arr, labels, count, levels, decimation, neighbors,
-                                             MIN_COARSE_POINTS, decompose_one, progress, origin)
+                                             MIN_COARSE_POINTS, decompose_one, progress, origin,
+                                             threads=thread_option(options["threads"]))
     model = _core.Model.from_arrays(arrays)
     dec_settings = dict(levels=levels, decimation=decimation, kernel=options["kernel"], neighbors=neighbors,
                         tolerance=options["tolerance"], max_iterations=options["max_iterations"],

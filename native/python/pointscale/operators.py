@@ -221,7 +221,8 @@ def _encode_by_part(points, base_points, labels, count, options, progress) -> De
             return encode(part_points, b, progress=part_progress, **options)
 
     arrays, stats, reports, message = encode_by_part(p, labels, count, encode_one, neighbors, MIN_COARSE_POINTS,
-                                                     as_callback(progress), origin)
+                                                     as_callback(progress), origin,
+                                                     threads=thread_option(options["threads"]))
     settings = dict(levels=2, encoding="base", kernel=options["kernel"], neighbors=neighbors,
                     tolerance=options["tolerance"], max_iterations=options["max_iterations"],
                     max_variation=options["max_variation"], base_points=len(b), parts=reports)

@@ -18,13 +18,13 @@ _NO_DECIMATION = 1.0
 
 
 def encode_by_part(p: np.ndarray, labels: np.ndarray, count: int, encode_one, neighbors: int, minimum: int,
-                   progress, origin: np.ndarray):
+                   progress, origin: np.ndarray, threads: int = 0):
     """(model arrays, stats, part reports, warning) of encode_one(points, progress) for each part."""
     def one(points, _normals, _levels, part_progress):
         return encode_one(points, part_progress)
 
     arrays, stats, reports = decompose_parts(p, None, labels, count, 2, _NO_DECIMATION, neighbors, minimum, one,
-                                             progress, origin)
+                                             progress, origin, threads=threads)
     return arrays, stats, reports, parts_warning(reports, 2)
 
 
