@@ -20,7 +20,7 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components, mini
 from scipy.spatial import cKDTree
 
 import pointscale as ps
-from pointscale import _core, shapes
+from pointscale import _testing, shapes
 from helpers import shared_model
 
 
@@ -123,9 +123,9 @@ def centre(points):
 def oriented(points, k=16, width=None):
     if width is None:
         return ps.estimate_normals(points, neighbors=k)
-    # No public API takes the tree's width: the core's own entry point, on centred points as
+    # No public API takes the tree's width: the test module's entry point, on centred points as
     # estimate_normals passes them.
-    return _core.estimate_normals(points - centre(points), k, True, width)
+    return _testing.oriented_normals(points - centre(points), k, width)
 
 
 # ------------------------------------------------------------------ synthetic, in code

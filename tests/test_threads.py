@@ -139,8 +139,96 @@ def test_reconstruct_from_several_threads_on_one_decomposition_gives_each_its_ow
     base = dec.base * 1.1
     gains = [np.array([1.0, g, 2.0 - g]) for g in np.linspace(0.0, 2.0, 8)]
     # Without the kept arrays, straight from the model:
-    expected = [dec._model.reconstruct(g, base, False, -1, None, dec.origin) for g in gains]
+    expected = [dec._reconstruct(g, base) for g in gains]
     with ThreadPoolExecutor(4) as pool:
         results = list(pool.map(lambda g: ps.reconstruct(dec, gains=g, base=base), gains * 3))
     for i, got in enumerate(results):
         assert np.array_equal(got, expected[i % len(gains)])
+
+
+def _thread_ids() -> set:
+    return set(os.listdir("/proc/self/task"))
+
+
+def _threads_started_during(call) -> set:
+    """The threads, other than the sampler, that this process started while call() ran: its
+    thread ids are sampled every millisecond, and ids only ever join the set when a thread
+    starts (one that ends before the first sample cannot be mistaken for a new one)."""
+    before = _thread_ids()
+    seen = set()
+    sampler_id = []
+    stop = threading.Event()
+
+    def sampler():
+        sampler_id.append(str(threading.get_native_id()))
+        while not stop.is_set():
+            seen.update(_thread_ids())
+            time.sleep(0.001)
+
+    t = threading.Thread(target=sampler)
+    t.start()
+    try:
+        call()
+    finally:
+        stop.set()
+        t.join()
+    return seen - before - set(sampler_id)
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="needs two cores")
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="counts threads through Linux's /proc")
+def test_a_thread_count_holds_for_its_own_call_only(big):
+    # threads=1 once stayed set for every later call of the process, such as reconstruct(),
+    # which takes no thread count of its own.
+    dec = ps.decompose(big[:100000], levels=3)
+    ps.estimate_normals(big[:20000], threads=1)
+    assert _threads_started_during(lambda: ps.reconstruct(dec, base=dec.base * 1.01))
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="needs two cores")
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="counts threads through Linux's /proc")
+def test_two_threads_calling_at_once_keep_their_own_thread_counts(big):
+    # Thread A decomposes with threads=1 and pauses in its first progress report while thread
+    # B projects with threads=2; then A goes on. A's call must stay on A's own thread: no
+    # thread may start while A's later reports run. The reports come from the calling thread in
+    # the middle of each parallel loop, while that loop's workers are alive, so a worker A
+    # started would be seen. Nothing else starts a thread then (B has been joined, the main
+    # thread waits for A), and threads that end only leave the set of ids, so a count that is
+    # right cannot fail this by chance.
+    a_started, b_joined = threading.Event(), threading.Event()
+    resumed = []  # the thread ids when A went on
+    started = []  # per report of A after that, the threads that were not there then
+    errors = []
+
+    def progress_a(fraction):
+        if not a_started.is_set():
+            a_started.set()
+            assert b_joined.wait(300), "thread B did not finish"
+            resumed.append(_thread_ids())
+        started.append(_thread_ids() - resumed[0])
+        return True
+
+    def run_a():
+        try:
+            ps.decompose(big, levels=3, threads=1, progress=progress_a)
+        except BaseException as exc:  # reported by the main thread
+            errors.append(exc)
+        finally:
+            a_started.set()
+
+    def run_b():
+        try:
+            assert a_started.wait(300), "thread A did not start"
+            ps.project(big[:100000], big[::3], threads=2)
+        except BaseException as exc:
+            errors.append(exc)
+
+    a, b = threading.Thread(target=run_a), threading.Thread(target=run_b)
+    a.start()
+    b.start()
+    b.join()
+    b_joined.set()
+    a.join()
+    assert not errors, errors
+    assert len(started) > 10, len(started)  # A reported often enough to have seen a worker
+    assert not set().union(*started), [sorted(s) for s in started if s]

@@ -1,5 +1,7 @@
-// pybind11 bindings: the only C++ file that knows Python. Every long call releases the GIL; the
-// progress callback takes it back only for the moment it runs.
+// pybind11 bindings of the core's model: decompose, reconstruct, folds, projection, normals and
+// the loading of saved models (operators.cpp binds the further operators). Every long call
+// releases the GIL, with the thread count asked for that call; the progress callback takes the
+// GIL back only for the moment it runs.
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -15,76 +17,23 @@
 #include "pointscale/single_pass.h"
 #include "pointscale/normal_estimation.h"
 #include "pointscale/oriented_normals.h"
-#include "pointscale/parallel.h"
 #include "pointscale/reconstruction.h"
 #include "pointscale/reconstructor.h"
 #include "pointscale/sample_spacing.h"
-#include "pointscale/self_knn.h"
 #include "pointscale/spatial_order.h"
-#include "python_progress.h"
+#include "bindings.h"
 
 namespace py = pybind11;
 using namespace pointscale;
-using pointscale_bindings::PythonProgress;
-using pointscale_bindings::without_gil;
+using namespace pointscale_bindings;
 
 namespace {
-
-using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
-using IndexArray = py::array_t<Index, py::array::c_style | py::array::forcecast>;
-
-Points to_points(const DoubleArray& a) {
-  if (a.ndim() != 2 || a.shape(1) != 3) throw std::invalid_argument("expected an (n, 3) array");
-  Points p(a.shape(0), 3);
-  std::copy(a.data(), a.data() + a.size(), p.data());
-  return p;
-}
-
-// An origin of 3 numbers, or zero for None.
-Vec3 to_origin(py::object origin) {
-  if (origin.is_none()) return Vec3::Zero();
-  const DoubleArray o = origin.cast<DoubleArray>();
-  if (o.size() != 3) throw std::invalid_argument("expected an origin of 3 numbers");
-  return Vec3(o.data()[0], o.data()[1], o.data()[2]);
-}
-
-// The points minus origin, in one copy (centring in NumPy first would hold a second one).
-Points to_points_centred(const DoubleArray& a, const Vec3& origin) {
-  Points p = to_points(a);
-  p.rowwise() -= origin.transpose();
-  return p;
-}
 
 // Gains (k,) per band or (k, n) per point as a k by 1 or k by n matrix.
 Eigen::MatrixXd to_gains(const DoubleArray& gains) {
   if (gains.ndim() < 1 || gains.ndim() > 2) throw std::invalid_argument("gains must be (k,) or (k, n)");
   return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
       gains.data(), gains.shape(0), gains.ndim() == 2 ? gains.shape(1) : 1);
-}
-
-template <class T>
-py::array_t<T> to_array(const std::vector<T>& v, std::vector<py::ssize_t> shape) {
-  py::array_t<T> out(shape);
-  std::copy(v.begin(), v.end(), out.mutable_data());
-  return out;
-}
-
-// (#P by k indices, #P by k squared distances) of every point's k nearest among `points`,
-// which fill(index, rows, distances) writes straight into the NumPy arrays (no copy to time).
-template <class Fill>
-py::tuple knn_rows(const DoubleArray& points, int k, const Fill& fill) {
-  Points p = to_points(points);
-  if (k < 1 || k > p.rows()) throw py::value_error("k must be between 1 and the number of points");
-  const std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(p.rows()), k};
-  py::array_t<Index> nearest(shape);
-  py::array_t<double> d2(shape);
-  Index* rows = nearest.mutable_data();
-  double* dist = d2.mutable_data();
-  without_gil([&] {
-    fill(SpatialIndex(p), rows, dist);
-    return 0;
-  });
-  return py::make_tuple(nearest, d2);
 }
 
 py::dict report_dict(const LevelReport& r) {
@@ -221,14 +170,13 @@ struct ReconstructionBuffers {
 
 }  // namespace
 
+void bind_options(py::module_& m);    // options.cpp
 void bind_operators(py::module_& m);  // operators.cpp
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "Pointscale native core. Use the pointscale package, which checks inputs, instead of this module.";
   py::register_exception<Cancelled>(m, "Cancelled");
-
-  m.def("set_threads", &set_thread_count, py::arg("threads"));
-  m.def("thread_count", &thread_count);
+  bind_options(m);  // first: the functions below take these classes
 
   py::class_<MultiscaleModel>(m, "Model")
       .def_property_readonly("base", [](const MultiscaleModel& s) { return s.base; })
@@ -238,7 +186,7 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("points", [](const MultiscaleModel& s) { return s.base.rows(); })
       .def_property_readonly("parts", [](const MultiscaleModel& s) -> py::object {
         if (s.parts.empty()) return py::none();
-        return to_array(s.parts, {static_cast<py::ssize_t>(s.parts.size())});
+        return to_array(s.parts);
       })
       .def_property_readonly("reports", [](const MultiscaleModel& s) {
         py::list out;
@@ -250,7 +198,7 @@ PYBIND11_MODULE(_core, m) {
       // origin: the decomposition's origin, or None. Given, `base` comes in world coordinates
       // and the points go out in them (one pass each way fewer than doing it in NumPy).
       .def("reconstruct", [](const MultiscaleModel& s, const DoubleArray& gains, py::object base, bool keep_levels,
-                             int upto, py::object progress, py::object origin, py::object buffers) {
+                             int upto, py::object progress, py::object origin, py::object buffers, int threads) {
         const Eigen::MatrixXd g = to_gains(gains);
         const Eigen::Index n = s.base.rows();
         if (s.bands() < 1) throw std::invalid_argument("the model has no bands");
@@ -262,7 +210,7 @@ PYBIND11_MODULE(_core, m) {
         if (has_base && edited.rows() != n) throw std::invalid_argument("base must be (n, 3)");
         PythonProgress p(progress);
         ReconstructionBuffers* kept = buffers.is_none() ? nullptr : buffers.cast<ReconstructionBuffers*>();
-        Reconstruction r = without_gil([&] {
+        Reconstruction r = without_gil(threads, [&] {
           std::unique_lock<std::mutex> lock;
           if (kept) lock = std::unique_lock<std::mutex>(kept->busy, std::try_to_lock);
           ReconstructionWorkspace* ws = lock.owns_lock() ? &kept->workspace : nullptr;
@@ -275,14 +223,15 @@ PYBIND11_MODULE(_core, m) {
           return out;
         });
         if (!keep_levels) return py::object(py::cast(std::move(r.positions)));
-        // Each array moved into its NumPy owner, not copied: 2k + 1 arrays of n x 3 (at 100k
-        // points and 4 levels, copying them took about as long as the reconstruction).
+        // Each array moved into its NumPy owner, not copied: 2k + 1 arrays of n x 3, which would
+        // cost about as much to copy as to compute.
         py::list levels, normals;
         for (Points& level : r.levels) levels.append(py::cast(std::move(level)));
         for (Points& level_normals : r.normals) normals.append(py::cast(std::move(level_normals)));
         return py::object(py::make_tuple(levels, normals));
       }, py::arg("gains"), py::arg("base") = py::none(), py::arg("keep_levels") = false, py::arg("upto") = -1,
-         py::arg("progress") = py::none(), py::arg("origin") = py::none(), py::arg("buffers") = py::none());
+         py::arg("progress") = py::none(), py::arg("origin") = py::none(), py::arg("buffers") = py::none(),
+         py::arg("threads") = 0);
 
   py::class_<ReconstructionBuffers>(m, "ReconstructionBuffers",
                                     "Storage that Model.reconstruct reuses from call to call (two (n, 3) arrays).")
@@ -291,12 +240,12 @@ PYBIND11_MODULE(_core, m) {
   // The solver for repeated reconstructions (reconstructor.h); the pointscale package checks
   // the arguments, these checks only keep a wrong call from reading out of bounds.
   py::class_<Reconstructor>(m, "Reconstructor")
-      .def(py::init([](const MultiscaleModel& model) {
+      .def(py::init([](const MultiscaleModel& model, int threads) {
         if (model.bands() < 1) throw std::invalid_argument("the model has no bands");
-        return without_gil([&] { return std::make_unique<Reconstructor>(model); });
-      }))
+        return without_gil(threads, [&] { return std::make_unique<Reconstructor>(model); });
+      }), py::arg("model"), py::arg("threads") = 0)
       .def("reconstruct", [](Reconstructor& r, const DoubleArray& gains, py::object base, py::object progress,
-                             py::object origin) {
+                             py::object origin, int threads) {
         const Eigen::Index n = r.points();
         const Eigen::MatrixXd g = to_gains(gains);
         if (g.rows() != r.bands() || (g.cols() != 1 && g.cols() != n)) throw std::invalid_argument("gains must be (k,) or (k, n)");
@@ -308,14 +257,13 @@ PYBIND11_MODULE(_core, m) {
         const Vec3 o = to_origin(origin);
         const double* base_rows = base.is_none() ? nullptr : b.data();
         PythonProgress p(progress);
-        return without_gil([&] { return r.reconstruct(g, base_rows, o, p.get()); });
+        return without_gil(threads, [&] { return r.reconstruct(g, base_rows, o, p.get()); });
       }, py::arg("gains"), py::arg("base") = py::none(), py::arg("progress") = py::none(),
-         py::arg("origin") = py::none());
+         py::arg("origin") = py::none(), py::arg("threads") = 0);
 
   // Folds of a result over its base (folds.h). result and base come in the package's world
   // coordinates; origin is the decomposition's (the stored base is model.base + origin).
   py::class_<FoldReference>(m, "FoldReference", "What a model's folds are measured against (folds.h).")
-      .def_property_readonly("exempting", [](const FoldReference& r) { return !r.exempt.empty(); })
       .def_property_readonly("rings", [](const FoldReference& r) {
         // Point by point, as point indices (the reference keeps them by slot).
         const std::size_t n = r.other_sheet.size(), w = static_cast<std::size_t>(r.ring_size);
@@ -325,50 +273,45 @@ PYBIND11_MODULE(_core, m) {
             rings[i * w + m] = r.order[static_cast<std::size_t>(r.rings[static_cast<std::size_t>(r.slot[i]) * w + m])];
         return to_array(rings, {static_cast<py::ssize_t>(n), r.ring_size});
       });
-  m.def("fold_reference", [](const MultiscaleModel& s, py::object input) {
-    Points in;
-    const bool has_input = !input.is_none();
-    if (has_input) in = to_points(input.cast<DoubleArray>());
-    if (has_input && in.rows() != s.base.rows()) throw std::invalid_argument("input must be (n, 3)");
-    return without_gil([&] { return fold_reference(s, has_input ? &in : nullptr); });
-  }, py::arg("model"), py::arg("input") = py::none());
+  m.def("fold_reference", [](const MultiscaleModel& s, py::object input, int threads) {
+    const OptionalPoints in(input);
+    if (in.present && in.p.rows() != s.base.rows()) throw std::invalid_argument("input must be (n, 3)");
+    return without_gil(threads, [&] { return fold_reference(s, in.get()); });
+  }, py::arg("model"), py::arg("input") = py::none(), py::arg("threads") = 0);
 
   m.def("find_folds", [](const MultiscaleModel& s, const FoldReference& ref, const DoubleArray& result,
-                         py::object base) {
+                         py::object base, int threads) {
     const Eigen::Index n = s.base.rows();
     require_reference(ref, n);
     if (result.ndim() != 2 || result.shape(0) != n || result.shape(1) != 3) throw std::invalid_argument("result must be (n, 3)");
-    Points edited;
-    const bool has_base = !base.is_none();
-    if (has_base) edited = to_points(base.cast<DoubleArray>());
-    if (has_base && edited.rows() != n) throw std::invalid_argument("base must be (n, 3)");
+    const OptionalPoints edited(base);
+    if (edited.present && edited.p.rows() != n) throw std::invalid_argument("base must be (n, 3)");
     const Eigen::Map<const Points> r(result.data(), n, 3);
     std::vector<std::uint8_t> kind;
-    without_gil([&] { find_folds(s, ref, has_base ? &edited : nullptr, r, kind); });
+    without_gil(threads, [&] { find_folds(s, ref, edited.get(), r, kind); });
     return to_array(kind, {static_cast<py::ssize_t>(n)});
-  }, py::arg("model"), py::arg("reference"), py::arg("result"), py::arg("base") = py::none());
+  }, py::arg("model"), py::arg("reference"), py::arg("result"), py::arg("base") = py::none(),
+     py::arg("threads") = 0);
 
   // Limits the gain where the result folds, in place on `result` (a writable C-contiguous
   // float64 (n, 3) array); returns what limit_folds reports.
   m.def("limit_folds", [](const MultiscaleModel& s, const FoldReference& ref,
                           py::array_t<double, py::array::c_style> result, py::object base, py::object origin,
-                          int max_rounds, int smoothing) {
+                          int max_rounds, int smoothing, int threads) {
     const Eigen::Index n = s.base.rows();
     require_reference(ref, n);
     if (!result.writeable() || result.ndim() != 2 || result.shape(0) != n || result.shape(1) != 3)
       throw std::invalid_argument("result must be a writable C-contiguous float64 (n, 3) array");
     if (max_rounds < 0 || max_rounds > 1000) throw std::invalid_argument("max_rounds must be in 0..1000");
     if (smoothing < 0 || smoothing > 64) throw std::invalid_argument("smoothing must be in 0..64");
-    Points edited;
-    const bool has_base = !base.is_none();
-    if (has_base) edited = to_points(base.cast<DoubleArray>());
-    if (has_base && edited.rows() != n) throw std::invalid_argument("base must be (n, 3)");
+    const OptionalPoints edited(base);
+    if (edited.present && edited.p.rows() != n) throw std::invalid_argument("base must be (n, 3)");
     const Vec3 o = to_origin(origin);
     Eigen::Map<Points> r(result.mutable_data(), n, 3);
     FoldLimitOptions options;
     options.max_rounds = max_rounds;
     options.smoothing = smoothing;
-    FoldLimitReport rep = without_gil([&] { return limit_folds(s, ref, has_base ? &edited : nullptr, o, r, options); });
+    FoldLimitReport rep = without_gil(threads, [&] { return limit_folds(s, ref, edited.get(), o, r, options); });
     const py::ssize_t count = static_cast<py::ssize_t>(n);
     py::dict d;
     d["before"] = to_array(rep.before, {count});
@@ -381,134 +324,90 @@ PYBIND11_MODULE(_core, m) {
     d["capped"] = rep.capped;
     return d;
   }, py::arg("model"), py::arg("reference"), py::arg("result"), py::arg("base") = py::none(),
-     py::arg("origin") = py::none(), py::arg("max_rounds") = 40, py::arg("smoothing") = 2);
+     py::arg("origin") = py::none(), py::arg("max_rounds") = 40, py::arg("smoothing") = 2, py::arg("threads") = 0);
 
   // (labels, count) of the parts a mesh's connectivity joins; pairs (#E, 2) vertex indices.
-  m.def("connected_parts", [](const DoubleArray& points, const IndexArray& pairs) {
+  m.def("connected_parts", [](const DoubleArray& points, const IndexArray& pairs, int threads) {
     const Points p = to_points(points);
     if (pairs.ndim() != 2 || pairs.shape(1) != 2) throw py::value_error("pairs must be (m, 2)");
     const IndexList list(pairs.data(), pairs.data() + pairs.size());
-    const Parts parts = without_gil([&] { return connected_parts(p, list); });
-    return py::make_tuple(to_array(parts.labels, {static_cast<py::ssize_t>(parts.labels.size())}), parts.count);
-  }, py::arg("points"), py::arg("pairs"));
+    const Parts parts = without_gil(threads, [&] { return connected_parts(p, list); });
+    return py::make_tuple(to_array(parts.labels), parts.count);
+  }, py::arg("points"), py::arg("pairs"), py::arg("threads") = 0);
 
   // Every point's k nearest of its own part (itself first), #P by k; parts (#P,) labels.
-  m.def("knn_within_parts", [](const DoubleArray& points, const IndexArray& parts, int k) {
+  m.def("knn_within_parts", [](const DoubleArray& points, const IndexArray& parts, int k, int threads) {
     const Points p = to_points(points);
     if (parts.ndim() != 1 || parts.shape(0) != p.rows()) throw py::value_error("parts must be (n,)");
     if (k < 1) throw py::value_error("k must be at least 1");
     const IndexList labels(parts.data(), parts.data() + parts.size());
     for (Index v : labels) if (v < 0 || v >= p.rows()) throw py::value_error("part label out of range");
-    const IndexList rows = without_gil([&] { return knn_within_parts(p, labels, k); });
+    const IndexList rows = without_gil(threads, [&] { return knn_within_parts(p, labels, k); });
     return to_array(rows, {static_cast<py::ssize_t>(p.rows()), k});
-  }, py::arg("points"), py::arg("parts"), py::arg("k"));
+  }, py::arg("points"), py::arg("parts"), py::arg("k"), py::arg("threads") = 0);
 
-  m.def("decompose", [](const DoubleArray& points, const DoubleArray& origin, py::object normals, int levels,
-                        double decimation, double kernel, int neighbors, double tolerance, int max_iterations,
-                        double max_variation, py::object diffusion, py::object progress, bool thin_sheets) {
+  // diffusion: the "diffusion" smoother's settings, or None for the MLS smoother.
+  m.def("decompose", [](const DoubleArray& points, const DoubleArray& origin, py::object normals,
+                        DecomposeOptions options, const DiffusionOptions* diffusion, py::object progress,
+                        int threads) {
     Points p = to_points_centred(points, to_origin(origin));
-    Points n;
-    const bool has_normals = !normals.is_none();
-    if (has_normals) n = to_points(normals.cast<DoubleArray>());
-    DecomposeOptions o;
-    o.levels = levels;
-    o.decimation = decimation;
-    o.kernel = kernel;
-    o.max_variation = max_variation;
-    o.mls.neighbors = neighbors;
-    o.mls.tolerance = tolerance;
-    o.mls.max_iterations = max_iterations;
-    o.thin_sheets = thin_sheets && has_normals;  // the Python layer orients normals when none are given
-    DiffusionOptions dif;  // (neighbors, lambda, mu, iterations) from operators._diffusion_options
-    if (!diffusion.is_none()) {
-      auto t = diffusion.cast<py::tuple>();
-      dif.neighbors = t[0].cast<int>();
-      dif.lambda = t[1].cast<double>();
-      dif.mu = t[2].cast<double>();
-      dif.iterations = t[3].cast<int>();
-      o.diffusion = &dif;
-    }
+    const OptionalPoints n(normals);
+    options.thin_sheets = options.thin_sheets && n.present;  // the Python layer orients normals when none are given
+    options.diffusion = diffusion;
     PythonProgress pp(progress);
-    return without_gil([&] { return decompose(std::move(p), has_normals ? &n : nullptr, o, pp.get()); });
-  }, py::arg("points"), py::arg("origin"), py::arg("normals"), py::arg("levels"), py::arg("decimation"),
-     py::arg("kernel"), py::arg("neighbors"), py::arg("tolerance"), py::arg("max_iterations"),
-     py::arg("max_variation"), py::arg("diffusion"), py::arg("progress"), py::arg("thin_sheets") = false);
+    return without_gil(threads, [&] { return decompose(std::move(p), n.get(), options, pp.get()); });
+  }, py::arg("points"), py::arg("origin"), py::arg("normals"), py::arg("options"), py::arg("diffusion") = py::none(),
+     py::arg("progress") = py::none(), py::arg("threads") = 0);
 
-  m.def("project", [](const DoubleArray& points, const DoubleArray& onto, double kernel, int neighbors,
-                      double tolerance, int max_iterations, py::object progress, py::object near) {
+  m.def("project", [](const DoubleArray& points, const DoubleArray& onto, double kernel, MlsOptions options,
+                      py::object progress, py::object near, int threads) {
     Points x = to_points(points), s = to_points(onto);
-    MlsOptions o;
-    o.neighbors = neighbors;
-    o.tolerance = tolerance;
-    o.max_iterations = max_iterations;
     IndexList near_support, order;
     if (!near.is_none()) {  // checked by the Python layer: (n,) in [0, #onto)
       const auto a = near.cast<IndexArray>();
       near_support.assign(a.data(), a.data() + a.size());
       order = group_by_label(near_support.data(), near_support.size(), static_cast<Index>(s.rows())).members;
-      o.near_support = &near_support;
-      o.order = &order;
+      options.near_support = &near_support;
+      options.order = &order;
     }
     PythonProgress pp(progress);
-    MlsResult r = without_gil([&] {
+    MlsResult r = without_gil(threads, [&] {
       SpatialIndex index(s);
       const Eigen::VectorXd h = kernel * local_spacing(index, 6);
-      return mls_project(x, index, h, o, ProgressStage{pp.get(), 0.0, 1.0});
+      return mls_project(x, index, h, options, ProgressStage{pp.get(), 0.0, 1.0});
     });
     return py::make_tuple(r.positions, r.normals, r.not_converged, r.degenerate);
-  }, py::arg("points"), py::arg("onto"), py::arg("kernel"), py::arg("neighbors"), py::arg("tolerance"),
-     py::arg("max_iterations"), py::arg("progress") = py::none(), py::arg("near") = py::none());
+  }, py::arg("points"), py::arg("onto"), py::arg("kernel"), py::arg("mls"), py::arg("progress") = py::none(),
+     py::arg("near") = py::none(), py::arg("threads") = 0);
 
   // One plane fit and projection per point (single_pass.h). With self, the points are `onto`
   // itself (checked by the Python layer), so `points` is None and nothing is copied twice.
   m.def("project_single_pass", [](py::object points, const DoubleArray& onto, double kernel, int neighbors,
-                                  bool self, bool estimate, py::object progress) {
+                                  bool self, bool estimate, py::object progress, int threads) {
     Points s = to_points(onto);
     Points x = self ? Points() : to_points(points.cast<DoubleArray>());
     PythonProgress pp(progress);
-    SinglePassResult r = without_gil([&] {
+    SinglePassResult r = without_gil(threads, [&] {
       SpatialIndex index(s);
       return mls_single_pass(self ? index.points() : x, self, index, kernel, neighbors, estimate, ProgressStage{pp.get(), 0.0, 1.0});
     });
     return py::make_tuple(r.positions, r.normals, r.moved, r.next_step, r.degenerate);
   }, py::arg("points"), py::arg("onto"), py::arg("kernel"), py::arg("neighbors"), py::arg("self"),
-     py::arg("estimate"), py::arg("progress") = py::none());
+     py::arg("estimate"), py::arg("progress") = py::none(), py::arg("threads") = 0);
 
-  m.def("decimate", [](const DoubleArray& points, std::size_t target, double max_variation) {
+  m.def("decimate", [](const DoubleArray& points, std::size_t target, double max_variation, int threads) {
     Points p = to_points(points);
-    Clustering c = without_gil([&] { return cluster_decimate(p, target, max_variation); });
-    return py::make_tuple(c.centroids, to_array(c.labels, {static_cast<py::ssize_t>(c.labels.size())}));
-  });
+    Clustering c = without_gil(threads, [&] { return cluster_decimate(p, target, max_variation); });
+    return py::make_tuple(c.centroids, to_array(c.labels));
+  }, py::arg("points"), py::arg("target"), py::arg("max_variation"), py::arg("threads") = 0);
 
-  // width: the orientation graph's (oriented_normals), for tests and bench/normals_bench.py;
-  // estimate_normals in Python leaves it at its default.
-  m.def("estimate_normals", [](const DoubleArray& points, int neighbors, bool orient, int width) {
+  m.def("estimate_normals", [](const DoubleArray& points, int neighbors, bool orient, int threads) {
     Points p = to_points(points);
-    return without_gil([&] {
-      if (orient) return oriented_normals(std::move(p), neighbors, width);
+    return without_gil(threads, [&] {
+      if (orient) return oriented_normals(std::move(p), neighbors, orientation_width);
       return pca_normals(SpatialIndex(std::move(p)), neighbors);
     });
-  }, py::arg("points"), py::arg("neighbors"), py::arg("orient"), py::arg("width") = orientation_width);
-
-  // Every point's k nearest among the points themselves (the rows decompose's kNN passes
-  // use), for tests against a brute-force search, and the same rows from a kd-tree query per
-  // point (what self_knn replaced), for bench/knn_bench.py.
-  m.def("self_knn", [](const DoubleArray& points, int k) {
-    return knn_rows(points, k, [&](const SpatialIndex& index, Index* rows, double* dist) {
-      self_knn(index, k, [&](Index i, const Index* idx, const double* d, int found) {
-        std::copy(idx, idx + found, rows + static_cast<std::size_t>(i) * k);
-        std::copy(d, d + found, dist + static_cast<std::size_t>(i) * k);
-      });
-    });
-  }, py::arg("points"), py::arg("k"));
-  m.def("kdtree_knn", [](const DoubleArray& points, int k) {
-    return knn_rows(points, k, [&](const SpatialIndex& index, Index* rows, double* dist) {
-      parallel_for(static_cast<std::size_t>(index.size()), [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i)
-          index.knn(index.points().row(static_cast<Eigen::Index>(i)).data(), k, rows + i * k, dist + i * k);
-      });
-    });
-  }, py::arg("points"), py::arg("k"));
+  }, py::arg("points"), py::arg("neighbors"), py::arg("orient"), py::arg("threads") = 0);
 
   bind_operators(m);
 }

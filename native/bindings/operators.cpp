@@ -1,5 +1,6 @@
 // pybind11 bindings of the paper's further operators: diffusion smoothing, ray shooting, encoding
-// onto a base, morphing, thin-sheet projection. Long calls release the GIL, like module.cpp.
+// onto a base, morphing, thin-sheet projection. Long calls release the GIL and take their thread
+// count per call, like module.cpp (bindings.h).
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -10,127 +11,67 @@
 #include "pointscale/morph.h"
 #include "pointscale/ray_shooting.h"
 #include "pointscale/sample_spacing.h"
-#include "python_progress.h"
+#include "bindings.h"
 
 namespace py = pybind11;
 using namespace pointscale;
-using pointscale_bindings::PythonProgress;
-using pointscale_bindings::without_gil;
-
-namespace {
-
-using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
-
-Points to_points(const DoubleArray& a) {
-  if (a.ndim() != 2 || a.shape(1) != 3) throw std::invalid_argument("expected an (n, 3) array");
-  Points p(a.shape(0), 3);
-  std::copy(a.data(), a.data() + a.size(), p.data());
-  return p;
-}
-
-// Optional (n, 3) array: None gives an empty matrix and has() false.
-struct OptionalPoints {
-  Points p;
-  bool present = false;
-  explicit OptionalPoints(const py::object& o) {
-    if (o.is_none()) return;
-    p = to_points(o.cast<DoubleArray>());
-    present = true;
-  }
-  const Points* get() const { return present ? &p : nullptr; }
-};
-
-MlsOptions mls_options(int neighbors, double tolerance, int max_iterations) {
-  MlsOptions o;
-  o.neighbors = neighbors;
-  o.tolerance = tolerance;
-  o.max_iterations = max_iterations;
-  return o;
-}
-
-py::array_t<Index> index_array(const IndexList& v) {
-  py::array_t<Index> out(static_cast<py::ssize_t>(v.size()));
-  std::copy(v.begin(), v.end(), out.mutable_data());
-  return out;
-}
-
-}  // namespace
+using namespace pointscale_bindings;
 
 void bind_operators(py::module_& m) {
   m.def("taubin_mu", &taubin_mu, py::arg("lam"), py::arg("pass_band") = 0.1);
 
-  m.def("diffuse", [](const DoubleArray& points, int neighbors, double lam, double mu, int iterations,
-                      py::object progress) {
+  m.def("diffuse", [](const DoubleArray& points, const DiffusionOptions& options, py::object progress, int threads) {
     const Points p = to_points(points);
-    DiffusionOptions o;
-    o.neighbors = neighbors;
-    o.lambda = lam;
-    o.mu = mu;
-    o.iterations = iterations;
     PythonProgress pp(progress);
-    return without_gil([&] { return diffuse(p, o, ProgressStage{pp.get(), 0.0, 1.0}); });
-  });
+    return without_gil(threads, [&] { return diffuse(p, options, ProgressStage{pp.get(), 0.0, 1.0}); });
+  }, py::arg("points"), py::arg("options"), py::arg("progress") = py::none(), py::arg("threads") = 0);
 
+  // onto_normals: the support's normals, or None to estimate them (MlsOptions::thin_sheets).
   m.def("project_sheets", [](const DoubleArray& points, const DoubleArray& onto, py::object onto_normals,
-                             double kernel, int neighbors, double tolerance, int max_iterations, double sheet,
-                             py::object progress) {
+                             double kernel, MlsOptions options, double sheet, py::object progress, int threads) {
     const Points x = to_points(points), s = to_points(onto);
     const OptionalPoints given(onto_normals);
-    MlsOptions o = mls_options(neighbors, tolerance, max_iterations);
-    o.sheet = sheet;
+    options.sheet = sheet;
+    if (given.present) options.support_normals = &given.p;
+    else options.thin_sheets = true;
     PythonProgress pp(progress);
-    if (given.present) o.support_normals = &given.p;
-    else o.thin_sheets = true;
-    MlsResult r = without_gil([&] {
+    MlsResult r = without_gil(threads, [&] {
       const SpatialIndex index(s);
       const Eigen::VectorXd h = kernel * local_spacing(index, 6);
-      return mls_project(x, index, h, o, ProgressStage{pp.get(), 0.0, 1.0});
+      return mls_project(x, index, h, options, ProgressStage{pp.get(), 0.0, 1.0});
     });
     return py::make_tuple(r.positions, r.normals, r.not_converged, r.degenerate);
-  });
+  }, py::arg("points"), py::arg("onto"), py::arg("onto_normals"), py::arg("kernel"), py::arg("mls"),
+     py::arg("sheet"), py::arg("progress") = py::none(), py::arg("threads") = 0);
 
   m.def("shoot_rays", [](const DoubleArray& origins, const DoubleArray& directions, const DoubleArray& onto,
-                         double kernel, int neighbors, double tolerance, int max_iterations, double max_distance,
-                         double min_cosine) {
+                         double kernel, const RayOptions& options, int threads) {
     const Points o = to_points(origins), d = to_points(directions), s = to_points(onto);
-    RayOptions ro;
-    ro.neighbors = neighbors;
-    ro.tolerance = tolerance;
-    ro.max_iterations = max_iterations;
-    ro.max_distance = max_distance;
-    ro.min_cosine = min_cosine;
-    RayHits r = without_gil([&] {
+    RayHits r = without_gil(threads, [&] {
       const SpatialIndex index(s);
-      return shoot_rays(o, d, index, kernel * local_spacing(index, 6), ro);
+      return shoot_rays(o, d, index, kernel * local_spacing(index, 6), options);
     });
     py::array_t<bool> missed(static_cast<py::ssize_t>(r.missed.size()));
     std::copy(r.missed.begin(), r.missed.end(), missed.mutable_data());
     return py::make_tuple(r.positions, r.distances, missed);
-  });
+  }, py::arg("origins"), py::arg("directions"), py::arg("onto"), py::arg("kernel"), py::arg("options"),
+     py::arg("threads") = 0);
 
-  m.def("encode", [](const DoubleArray& points, const DoubleArray& base, py::object base_normals, double kernel,
-                     int neighbors, double tolerance, int max_iterations, double max_variation, py::object progress) {
+  m.def("encode", [](const DoubleArray& points, const DoubleArray& base, py::object base_normals,
+                     const EncodeOptions& options, py::object progress, int threads) {
     const Points p = to_points(points), b = to_points(base);
     const OptionalPoints bn(base_normals);
-    EncodeOptions o;
-    o.kernel = kernel;
-    o.mls = mls_options(neighbors, tolerance, max_iterations);
-    o.max_variation = max_variation;
     PythonProgress pp(progress);
-    return without_gil([&] { return encode_onto(p, b, bn.get(), o, pp.get()); });
-  });
+    return without_gil(threads, [&] { return encode_onto(p, b, bn.get(), options, pp.get()); });
+  }, py::arg("points"), py::arg("base"), py::arg("base_normals"), py::arg("options"),
+     py::arg("progress") = py::none(), py::arg("threads") = 0);
 
   m.def("morph", [](const DoubleArray& a, const DoubleArray& b, const DoubleArray& base, py::object base_normals,
-                    double kernel, int neighbors, double tolerance, int max_iterations, int interpolation_neighbors,
-                    py::object progress) {
+                    const MorphOptions& options, py::object progress, int threads) {
     const Points pa = to_points(a), pb = to_points(b), ps = to_points(base);
     const OptionalPoints bn(base_normals);
-    MorphOptions o;
-    o.kernel = kernel;
-    o.mls = mls_options(neighbors, tolerance, max_iterations);
-    o.interpolation_neighbors = interpolation_neighbors;
     PythonProgress pp(progress);
-    MorphModel r = without_gil([&] { return morph(pa, pb, ps, bn.get(), o, pp.get()); });
+    MorphModel r = without_gil(threads, [&] { return morph(pa, pb, ps, bn.get(), options, pp.get()); });
     py::dict d;
     d["base"] = r.base;
     d["normals"] = r.normals;
@@ -139,45 +80,31 @@ void bind_operators(py::module_& m) {
     d["not_converged"] = r.not_converged;
     d["degenerate"] = r.degenerate;
     return d;
-  });
+  }, py::arg("a"), py::arg("b"), py::arg("base"), py::arg("base_normals"), py::arg("options"),
+     py::arg("progress") = py::none(), py::arg("threads") = 0);
 
-  m.def("knn_interpolate", [](const DoubleArray& from, const Eigen::VectorXd& values, const DoubleArray& to, int k) {
-    const Points f = to_points(from), t = to_points(to);
-    return without_gil([&] { return knn_interpolate(f, values, t, k); });
-  });
+  // Values at `points` from their k nearest of `onto` (alignment.nearest_indices).
+  m.def("knn_interpolate", [](const DoubleArray& onto, const Eigen::VectorXd& values, const DoubleArray& points, int k,
+                              int threads) {
+    const Points f = to_points(onto), t = to_points(points);
+    return without_gil(threads, [&] { return knn_interpolate(f, values, t, k); });
+  }, py::arg("onto"), py::arg("values"), py::arg("points"), py::arg("k"), py::arg("threads") = 0);
 
-  m.def("decompose_rayshoot", [](const DoubleArray& points, py::object normals, int levels, double decimation,
-                                 double kernel, int neighbors, double tolerance, int max_iterations,
-                                 double max_variation, py::object diffusion, double max_distance, double fine_kernel,
-                                 py::object progress) {
+  // diffusion: the "diffusion" smoother's settings, or None for the MLS smoother; rays: how the
+  // finer levels are found from the coarser ones.
+  m.def("decompose_rayshoot", [](const DoubleArray& points, py::object normals, const DecomposeOptions& options,
+                                 const DiffusionOptions* diffusion, const RayOptions& rays, double fine_kernel,
+                                 py::object progress, int threads) {
     const Points p = to_points(points);
     const OptionalPoints n(normals);
-    DecomposeOptions o;
-    o.levels = levels;
-    o.decimation = decimation;
-    o.kernel = kernel;
-    o.max_variation = max_variation;
-    o.mls = mls_options(neighbors, tolerance, max_iterations);
-    DiffusionOptions dif;
-    const bool diffused = !diffusion.is_none();
-    if (diffused) {
-      auto t = diffusion.cast<py::tuple>();  // (neighbors, lambda, mu, iterations)
-      dif.neighbors = t[0].cast<int>();
-      dif.lambda = t[1].cast<double>();
-      dif.mu = t[2].cast<double>();
-      dif.iterations = t[3].cast<int>();
-    }
-    RayOptions rays;
-    rays.neighbors = neighbors;
-    rays.max_iterations = std::max(max_iterations, 50);
-    rays.max_distance = max_distance;
     RayshootReport report;
     PythonProgress pp(progress);
-    MultiscaleModel model = without_gil([&] {
-      return decompose_rayshoot(p, n.get(), o, diffused ? &dif : nullptr, rays, fine_kernel, report, pp.get());
+    MultiscaleModel model = without_gil(threads, [&] {
+      return decompose_rayshoot(p, n.get(), options, diffusion, rays, fine_kernel, report, pp.get());
     });
     py::list missed;
-    for (const auto& v : report.missed_points) missed.append(index_array(v));
+    for (const auto& v : report.missed_points) missed.append(to_array(v));
     return py::make_tuple(std::move(model), missed);
-  });
+  }, py::arg("points"), py::arg("normals"), py::arg("options"), py::arg("diffusion"), py::arg("rays"),
+     py::arg("fine_kernel"), py::arg("progress") = py::none(), py::arg("threads") = 0);
 }

@@ -13,15 +13,20 @@
 namespace pointscale {
 
 namespace {
-std::atomic<int> configured_threads{0};
+// The count asked for by the innermost ThreadCountScope on this thread; 0 when none was.
+thread_local int scoped_threads = 0;
+}  // namespace
+
+ThreadCountScope::ThreadCountScope(int threads) : previous_(scoped_threads) {
+  if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0: all cores), got " + std::to_string(threads));
+  scoped_threads = threads;
 }
 
-void set_thread_count(int threads) { configured_threads = std::max(0, threads); }
+ThreadCountScope::~ThreadCountScope() { scoped_threads = previous_; }
 
 int thread_count() {
-  int t = configured_threads.load();
-  if (t > 0) return t;
-  return std::max(1u, std::thread::hardware_concurrency());
+  if (scoped_threads > 0) return scoped_threads;
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
 void parallel_for(std::size_t n, const std::function<void(std::size_t, std::size_t)>& body,
@@ -29,7 +34,8 @@ void parallel_for(std::size_t n, const std::function<void(std::size_t, std::size
   if (n == 0) return;
   chunk = std::max<std::size_t>(1, chunk);
   const std::size_t n_chunks = (n + chunk - 1) / chunk;
-  const int n_threads = static_cast<int>(std::min<std::size_t>(thread_count(), n_chunks));
+  const int call_threads = thread_count();
+  const int n_threads = static_cast<int>(std::min<std::size_t>(call_threads, n_chunks));
 
   std::atomic<std::size_t> next{0};
   std::atomic<std::size_t> done{0};
@@ -61,7 +67,10 @@ void parallel_for(std::size_t n, const std::function<void(std::size_t, std::size
   // started workers, join them, and report the failure to the caller instead.
   try {
     for (int t = 1; t < n_threads; ++t)
-      workers.emplace_back([&] { while (work_one()) {} });
+      workers.emplace_back([&] {
+        ThreadCountScope same_count(call_threads);  // for any loop nested in body
+        while (work_one()) {}
+      });
   } catch (const std::exception& e) {
     stop = true;
     for (auto& w : workers) w.join();

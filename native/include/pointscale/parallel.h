@@ -8,8 +8,24 @@
 
 namespace pointscale {
 
-// Number of threads used by the core: set_thread_count(0) means all hardware threads.
-void set_thread_count(int threads);
+// Sets how many threads the core's calls made on this thread use, until it goes out of scope
+// (0: all hardware threads, the default). A caller such as the Python bindings makes one per
+// call around the work. The count belongs to the calling thread, not to the process, so two
+// threads calling the core at once with different counts do not see each other's, and a count
+// asked for one call does not stay behind for the next. parallel_for's workers take the
+// count of the call that started them, so work nested inside a loop keeps to it too.
+class ThreadCountScope {
+ public:
+  explicit ThreadCountScope(int threads);  // std::invalid_argument when threads < 0
+  ~ThreadCountScope();
+  ThreadCountScope(const ThreadCountScope&) = delete;
+  ThreadCountScope& operator=(const ThreadCountScope&) = delete;
+
+ private:
+  int previous_;
+};
+
+// The number of threads the current call uses (ThreadCountScope), at least 1.
 int thread_count();
 
 // Calls body(begin, end) on disjoint chunks covering [0, n). The calling thread works too and

@@ -4,14 +4,13 @@ A surface becomes a smooth base P^0 and a stack of signed normal-displacement ba
 detail can be filtered band by band, carried along a deformed base, or moved between models.
 """
 from ._core import Cancelled
-from .multiscale import (Decomposition, Reconstructor, blend, coarse_base_warning, decompose, load, reconstruct,
-                         reconstruct_levels)
+from .multiscale import (Decomposition, Reconstructor, blend, coarse_base_warning, decompose, decompose_rayshoot,
+                         load, rays_missed_points, reconstruct, reconstruct_levels)
 from .surface import decimate, estimate_normals, project
 from .folds import Folds, find_folds
 from .mirror import Mirror
 from .morphing import Morph, morph
-from .operators import (decompose_rayshoot, diffusion_levels, ellipsoid_base, encode, project_sheets,
-                        rays_missed_points, shoot_rays, smooth_diffusion)
+from .operators import diffusion_levels, ellipsoid_base, encode, project_sheets, shoot_rays, smooth_diffusion
 from . import alignment, io, meshes, mirror, parts, shapes
 
 __version__ = "0.1.0"

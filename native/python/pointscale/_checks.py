@@ -20,8 +20,6 @@ import numbers
 
 import numpy as np
 
-from . import _core
-
 MAX_COORDINATE = 1e150
 MAX_EXTENT = 1e50
 MIN_EXTENT = 1e-50
@@ -166,8 +164,9 @@ def kernel_option(value, name: str = "kernel") -> float:
     return positive(value, name, minimum=MIN_KERNEL, maximum=MAX_KERNEL)
 
 
-def set_threads(threads) -> None:
-    """Checks `threads` (0 for all cores, else 1..MAX_THREADS) and sets the core's count."""
+def thread_option(threads) -> int:
+    """Checks `threads` (0 for all cores, else 1..MAX_THREADS); returns it for one core call,
+    which runs on that many threads and leaves no count behind for other calls."""
     if isinstance(threads, (bool, np.bool_)) or not isinstance(threads, (numbers.Integral, float, np.floating)):
         raise ValueError(f"threads must be a whole number in [0, {MAX_THREADS}] (0: all cores), got {threads!r}")
     if isinstance(threads, (float, np.floating)) and not (np.isfinite(threads) and threads == int(threads)):
@@ -175,7 +174,7 @@ def set_threads(threads) -> None:
     t = int(threads)
     if not 0 <= t <= MAX_THREADS:
         raise ValueError(f"threads must be in [0, {MAX_THREADS}] (0: all cores), got {threads!r}")
-    _core.set_threads(t)
+    return t
 
 
 def finite_result(array, what: str):

@@ -52,17 +52,17 @@ def _sample(points: np.ndarray, count: int = _SAMPLE) -> np.ndarray:
     return points[np.random.default_rng(0).choice(len(points), count, replace=False)]
 
 
-def nearest_indices(onto: np.ndarray, points: np.ndarray) -> np.ndarray:
+def nearest_indices(onto: np.ndarray, points: np.ndarray, threads: int = 0) -> np.ndarray:
     """The index of each point's nearest point of `onto`: the core's k-nearest interpolation of
     the indices themselves, with one neighbour (its weight is then the whole)."""
     values = np.arange(len(onto), dtype=np.float64)
-    return np.rint(_core.knn_interpolate(onto, values, points, 1)).astype(np.int64)
+    return np.rint(_core.knn_interpolate(onto, values, points, k=1, threads=threads)).astype(np.int64)
 
 
-def _mean_distance(a: np.ndarray, b: np.ndarray) -> float:
+def _mean_distance(a: np.ndarray, b: np.ndarray, threads: int) -> float:
     """Mean distance of b's points to their nearest in a, and of a's to b (symmetric)."""
-    d_ba = np.linalg.norm(b - a[nearest_indices(a, b)], axis=1).mean()
-    d_ab = np.linalg.norm(a - b[nearest_indices(b, a)], axis=1).mean()
+    d_ba = np.linalg.norm(b - a[nearest_indices(a, b, threads)], axis=1).mean()
+    d_ab = np.linalg.norm(a - b[nearest_indices(b, a, threads)], axis=1).mean()
     return 0.5 * (d_ab + d_ba)
 
 
@@ -100,19 +100,20 @@ def _rigid_fit(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.n
     return r, ct - r @ cs
 
 
-def _icp(b: np.ndarray, a: np.ndarray, start: Similarity) -> Similarity:
+def _icp(b: np.ndarray, a: np.ndarray, start: Similarity, threads: int) -> Similarity:
     current = start
     for _ in range(_ICP_ROUNDS):
         moved = current.apply(b)
-        r, t = _rigid_fit(moved, a[nearest_indices(a, moved)])
+        r, t = _rigid_fit(moved, a[nearest_indices(a, moved, threads)])
         current = Similarity(current.scale, r @ current.rotation, r @ current.translation + t)
         if np.abs(r - np.eye(3)).max() < 1e-9 and np.linalg.norm(t) < 1e-9 * current.scale:
             break
     return current
 
 
-def similarity(points_b: np.ndarray, points_a: np.ndarray, method: str) -> Similarity:
-    """The similarity that carries B onto A by `method` (METHODS; "none" is the identity)."""
+def similarity(points_b: np.ndarray, points_a: np.ndarray, method: str, *, threads: int = 0) -> Similarity:
+    """The similarity that carries B onto A by `method` (METHODS; "none" is the identity).
+    threads: as morph's, for the nearest-point queries."""
     if method not in METHODS:
         raise ValueError(f"align must be one of {', '.join(METHODS)}, got {method!r}")
     if method == "none":
@@ -122,8 +123,8 @@ def similarity(points_b: np.ndarray, points_a: np.ndarray, method: str) -> Simil
         return _bbox(b, a)
     candidates = _pca_candidates(b, a)
     if method == "icp":
-        candidates = [_icp(b, a, c) for c in candidates]
-    return min(candidates, key=lambda s: _mean_distance(a, s.apply(b)))
+        candidates = [_icp(b, a, c, threads) for c in candidates]
+    return min(candidates, key=lambda s: _mean_distance(a, s.apply(b), threads))
 
 
 def overlap(points_a: np.ndarray, points_b: np.ndarray) -> float:

@@ -75,12 +75,14 @@ def reference_for(dec, reference: str = "input"):
     unedited reconstruction, the first time."""
     from .multiscale import reconstruct
     key = "fold_reference_" + _reference_option(reference)
-    if key not in dec._cache:
-        if dec._model.bands < 1:
+
+    def make():
+        if dec.n_bands < 1:
             raise ValueError("the decomposition has no bands")
         input_points = dec._full(reconstruct(dec)) if reference == "input" else None
-        dec._cache[key] = _core.fold_reference(dec._model, input_points)
-    return dec._cache[key]
+        return _core.fold_reference(dec._model, input=input_points)
+
+    return dec._kept(key, make)
 
 
 def find_folds(dec, points, base=None, *, fold_reference: str = "input") -> Folds:
@@ -93,7 +95,7 @@ def find_folds(dec, points, base=None, *, fold_reference: str = "input") -> Fold
     if p.shape[0] != dec.n_points:
         raise ValueError(f"points must have the decomposition's {dec.n_points} points, got {p.shape[0]}")
     finite_result(p, "points")
-    kind = _core.find_folds(dec._model, ref, dec._full(p), _base_array(dec, base))
+    kind = _core.find_folds(dec._model, ref, dec._full(p), base=_base_array(dec, base))
     return _of_half(dec, Folds(kind=kind, before=kind.copy(), limiter=np.ones(len(kind))))
 
 
@@ -109,10 +111,10 @@ def with_folds(dec, points: np.ndarray, base, mode: str, reference: str):
     whole model's, and the Folds the half's."""
     ref = reference_for(dec, reference)
     if mode == "report":
-        kind = _core.find_folds(dec._model, ref, points, base)
+        kind = _core.find_folds(dec._model, ref, points, base=base)
         return points, _of_half(dec, Folds(kind=kind, before=kind.copy(), limiter=np.ones(len(kind))))
     points = np.require(points, np.float64, ("C", "W"))
-    rep = _core.limit_folds(dec._model, ref, points, base, dec.origin, MAX_FOLD_ROUNDS)
+    rep = _core.limit_folds(dec._model, ref, points, base=base, origin=dec.origin, max_rounds=MAX_FOLD_ROUNDS)
     limiter = rep["limiter"] if rep["limiter"] is not None else np.ones(len(points))
     return points, _of_half(dec, Folds(kind=rep["after"], before=rep["before"], limiter=limiter,
                                        rounds=int(rep["rounds"]), capped=bool(rep["capped"])))

@@ -253,11 +253,8 @@ def decompose_mirrored(points, mirror, normals=None, faces=None, edges=None, **o
     for report in dec.settings.get("parts") or ():
         first = report["first_vertex"]
         report["first_vertex"], report["mirrored"] = int(symmetry.source[first]), bool(symmetry.element[first])
-    dec._mirror = symmetry
+    dec._mirror_about(symmetry)
     dec.settings["mirror"] = symmetry.settings()
-    missed = dec._cache.get("rays_missed_points")
-    if missed is not None:  # ray shooting's misses, as the half's points
-        dec._cache["rays_missed_points"] = [np.unique(symmetry.source[m]).astype(np.int32) for m in missed]
     return dec
 
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from . import _core
 from ._checks import (MAX_GAIN, MAX_ITERATIONS, MAX_NEIGHBORS, as_callback, as_normals_of, as_points, centre,
-                      finite_result, kernel_option, positive, require_near, require_surface, set_threads)
+                      finite_result, kernel_option, positive, require_near, require_surface, thread_option)
 from .multiscale import MIN_COARSE_POINTS
 
 #: Below this overlap of A's and B's bounding boxes (intersection over union) morph warns:
@@ -74,9 +74,10 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_sam
     if align not in METHODS:
         raise ValueError(f"align must be one of {', '.join(METHODS)}, got {align!r}")
     a, b = as_points(points_a, "points_a"), as_points(points_b, "points_b")
+    threads = thread_option(threads)
     placement = None
     if align != "none":
-        carry = similarity(b, a, align)
+        carry = similarity(b, a, align, threads=threads)
         b, placement = carry.apply(b), carry.inverse()
     if base_points is None:
         from .operators import ellipsoid_base
@@ -92,7 +93,7 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_sam
     result = None
     if any(c is not None for c in (faces_a, edges_a, faces_b, edges_b)):
         from .parts_onto_base import matched_parts, morph_by_part
-        labels_a, labels_b, count = matched_parts(a, b, faces_a, edges_a, faces_b, edges_b)
+        labels_a, labels_b, count = matched_parts(a, b, faces_a, edges_a, faces_b, edges_b, threads)
         if count > 1:
             def morph_one(ia, ib, part_progress):
                 return _morph_where_they_lie(a[ia], b[ib], base_points, progress=part_progress, **options)
@@ -117,9 +118,11 @@ def _morph_where_they_lie(a, b, base_points, *, base_normals, kernel, neighbors,
     max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
     bn = as_normals_of(base_normals, s, "base_normals", "base_points")
     origin = centre(np.vstack([a, b, s]))
-    set_threads(threads)
-    r = _core.morph(a - origin, b - origin, s - origin, bn, kernel, neighbors, tolerance, max_iterations, k,
-                    as_callback(progress))
+    options = _core.MorphOptions(
+        kernel=kernel, interpolation_neighbors=k,
+        mls=_core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations))
+    r = _core.morph(a - origin, b - origin, s - origin, base_normals=bn, options=options,
+                    progress=as_callback(progress), threads=thread_option(threads))
     for key in ("base", "normals", "detail_a", "detail_b"):
         finite_result(r[key], f"the morph's {key.replace('_', ' ')}")
     return Morph(r["base"] + origin, r["normals"], r["detail_a"], r["detail_b"],

@@ -12,7 +12,8 @@ import numpy as np
 from . import _core
 from ._checks import (MAX_COORDINATE, MAX_EXTENT, MAX_GAIN, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS,
                       as_callback, as_normals_of, as_points, centre, finite_result, kernel_option, positive,
-                      require_extent, require_near, require_surface, set_threads)
+                      require_extent, require_near, require_surface, thread_option)
+from ._diffusion import settings_record, smoother_options
 
 #: The coarsest level keeps gamma**(levels-1) * n points; fewer than this cannot carry a surface.
 MIN_COARSE_POINTS = 8
@@ -42,6 +43,9 @@ class Decomposition:
     # A decomposition of a mirrored half (pointscale.mirror): _model holds the whole model, and
     # every output for the half's points is symmetrised through this.
     _mirror: object = field(default=None, repr=False, compare=False)
+    # decompose_rayshoot's rays that found no surface: per band, the points' indices. None for
+    # any other decomposition, and for one loaded from a file (which keeps only the counts).
+    _missed_rays: list | None = field(default=None, repr=False, compare=False)
 
     @property
     def mirror(self):
@@ -99,10 +103,29 @@ class Decomposition:
         """Per level (0 first): support points, kernel width, projections that did not converge."""
         return self._stats if self._stats is not None else self._model.reports
 
+    def _reconstruct(self, gains: np.ndarray, base, *, keep_levels: bool = False, progress=None, buffers=None,
+                     threads: int = 0):
+        """The core's reconstruction of the whole model from checked gains and base (world
+        coordinates): the finest level, or with keep_levels (levels, normals) of every level.
+        The core adds the origin in place (a NumPy sum would allocate every level again)."""
+        return self._model.reconstruct(gains, base=base, keep_levels=keep_levels, progress=progress,
+                                       origin=self.origin, buffers=buffers, threads=threads)
+
+    def _kept(self, key: str, make):
+        """What make() returns, made once and kept with this decomposition (fold references...)."""
+        if key not in self._cache:
+            self._cache[key] = make()
+        return self._cache[key]
+
+    def _mirror_about(self, symmetry) -> None:
+        """Makes this decomposition of the whole model one of its mirrored half (pointscale.mirror)."""
+        self._mirror = symmetry
+        if self._missed_rays is not None:  # ray shooting's misses, as the half's points
+            self._missed_rays = [np.unique(symmetry.source[m]).astype(np.int32) for m in self._missed_rays]
+
     def _levels(self):
         if "levels" not in self._cache:
-            # The core adds the origin in place (a NumPy sum would allocate every level again).
-            levels, normals = self._model.reconstruct(np.ones(self.n_bands), None, True, -1, None, self.origin)
+            levels, normals = self._reconstruct(np.ones(self.n_bands), None, keep_levels=True)
             for level in levels:
                 finite_result(level, "a level of this decomposition")
             symmetric_normals = (lambda a: a) if self._mirror is None else self._mirror.symmetric_normals
@@ -336,7 +359,7 @@ def _points_needed(levels: int, decimation: float, what: str) -> int:
 
 def _require_round_trip(dec: "Decomposition", points: np.ndarray, why: str) -> None:
     """Refuses a decomposition that does not give its input back (a collapsed or inflated base)."""
-    back = dec._model.reconstruct(np.ones(dec.n_bands), None, False, -1, None, dec.origin, None)
+    back = dec._reconstruct(np.ones(dec.n_bands), None)
     scale = max(float(np.abs(points - dec.origin).max()), np.finfo(float).tiny)
     error = float(np.abs(back - points).max()) if np.isfinite(back).all() else np.inf
     if not error <= 1e-6 * scale:
@@ -399,23 +422,22 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     if faces is not None or edges is not None:
         from .parts import connected_parts
         p = as_points(points)
-        labels, count = connected_parts(p, faces, edges)
+        labels, count = connected_parts(p, faces, edges, threads=threads)
         if count > 1:
             options = dict(decimation=decimation, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
                            max_iterations=max_iterations, max_variation=max_variation, smoother=smoother,
                            encoding=encoding, diffusion_iterations=diffusion_iterations, lam=lam, taubin=taubin,
                            diffusion_neighbors=diffusion_neighbors, threads=threads, sheets=sheets)
             return _decompose_by_part(p, labels, count, levels, normals, options, as_callback(progress))
-    from . import operators  # imports this module: import it late
     if encoding == "rayshoot":
-        return operators.decompose_rayshoot(
+        return decompose_rayshoot(
             points, levels, smoother=smoother, decimation=decimation, kernel=kernel, normals=normals,
             neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations, max_variation=max_variation,
             diffusion_iterations=diffusion_iterations, lam=lam, taubin=taubin,
             diffusion_neighbors=diffusion_neighbors, threads=threads, progress=progress)
     diffusion = None
     if smoother == "diffusion":
-        diffusion = operators._diffusion_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
+        diffusion = smoother_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
     levels = positive(levels, "levels", integer=True, maximum=MAX_LEVELS)
     if levels < 2:
         raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
@@ -447,14 +469,16 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     if sheets:
         settings["sheets"] = True
     if diffusion is not None:
-        settings["diffusion"] = dict(zip(("neighbors", "lam", "mu", "iterations"), diffusion))
-    set_threads(threads)
-    model = _core.decompose(p, origin, n_arr, levels, decimation, kernel, neighbors, tolerance,
-                            max_iterations, max_variation, diffusion, progress, thin_sheets=bool(sheets))
+        settings["diffusion"] = settings_record(diffusion)
+    options = _core.DecomposeOptions(
+        levels=levels, decimation=decimation, kernel=kernel, max_variation=max_variation, thin_sheets=bool(sheets),
+        mls=_core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations))
+    model = _core.decompose(p, origin, n_arr, options=options, diffusion=diffusion, progress=progress,
+                            threads=thread_option(threads))
     dec = Decomposition(model, origin, settings)
     _require_finite_model(dec)
     if diffusion is not None:
-        _require_round_trip(dec, p, f"diffusion_iterations={diffusion[3]} smoothed the support too far; "
+        _require_round_trip(dec, p, f"diffusion_iterations={diffusion.iterations} smoothed the support too far; "
                                     "use fewer iterations")
     return dec
 
@@ -484,7 +508,8 @@ def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> 
             return decompose(points, part_levels, normals=part_normals, progress=part_progress, **options)
 
     arrays, stats, reports = decompose_parts(p, n_arr, labels, count, levels, decimation, neighbors,
-                                             MIN_COARSE_POINTS, decompose_one, progress, origin)
+                                             MIN_COARSE_POINTS, decompose_one, progress, origin,
+                                             threads=thread_option(options["threads"]))
     model = _core.Model.from_arrays(arrays)
     dec_settings = dict(levels=levels, decimation=decimation, kernel=options["kernel"], neighbors=neighbors,
                         tolerance=options["tolerance"], max_iterations=options["max_iterations"],
@@ -566,7 +591,7 @@ def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None, fol
     from .folds import _fold_mode_option, _reference_option
     mode = _fold_mode_option(folds)
     _reference_option(fold_reference)
-    out = dec._model.reconstruct(g, b, False, -1, as_callback(progress), dec.origin, dec._buffers)
+    out = dec._reconstruct(g, b, progress=as_callback(progress), buffers=dec._buffers)
     return _result_with_folds(dec, out, b, mode, fold_reference)
 
 
@@ -604,14 +629,14 @@ class Reconstructor:
         b = _base_array(self._dec, base)
         mode = _fold_mode_option(folds)
         _reference_option(fold_reference)
-        out = self._core.reconstruct(g, b, as_callback(progress), self._dec.origin)
+        out = self._core.reconstruct(g, base=b, progress=as_callback(progress), origin=self._dec.origin)
         return _result_with_folds(self._dec, out, b, mode, fold_reference)
 
 
 def reconstruct_levels(dec: Decomposition, gains=None, base=None) -> np.ndarray:
     """Every level P^0..P^k rebuilt like reconstruct(): (k+1, n, 3)."""
     _check_decomposition(dec)
-    levels, _ = dec._model.reconstruct(_gains_array(dec, gains), _base_array(dec, base), True, -1, None, dec.origin)
+    levels, _ = dec._reconstruct(_gains_array(dec, gains), _base_array(dec, base), keep_levels=True)
     return finite_result(np.stack([dec._symmetric(level) for level in levels]), "the reconstruction")
 
 
@@ -630,3 +655,73 @@ def blend(dec: Decomposition, t: float) -> np.ndarray:
     if alpha == 0.0:
         return lower
     return lower + alpha * (dec.level(l + 1) - lower)
+
+
+def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decimation: float = 0.25,
+                       kernel: float = 1.0, normals=None, neighbors: int = 24, tolerance: float = 1e-7,
+                       max_iterations: int = 30, max_variation: float = 0.05, diffusion_iterations: int = 10,
+                       lam: float = 0.5, taubin: bool = True, diffusion_neighbors: int = 10,
+                       fine_kernel: float = 0.5, max_distance=None, threads: int = 0,
+                       progress=None) -> Decomposition:
+    """Multiscale decomposition with bottom-up ray-shooting encoding (Sec. 6.1).
+
+    The scale space is built as in decompose() (smoother "mls": decimate and project, Sec. 7;
+    "diffusion": the decimated support is diffused first, Sec. 5.1, with diffusion_iterations,
+    lam, taubin and diffusion_neighbors). Then P^0 is kept and every finer level is where rays from
+    the level below, along its normals, meet the next finer surface. The finest level therefore
+    resamples the input's MLS surface: reconstruct() gives it back exactly, not the input points.
+    settings["rays_missed"] counts, per band, rays that found no surface (these fall back to the
+    orthogonal projection of their origin, so those points of the finest level may lie off the
+    input surface); rays_missed_points(dec) lists them, and stats[l]["not_converged"] repeats
+    the count per level.
+    fine_kernel  kernel of the input's own MLS surface, which the finest level resamples, as a
+                 multiple of the input's spacing: small, so that it stays close to the samples
+    """
+    if smoother not in ("mls", "diffusion"):
+        raise ValueError(f"smoother must be 'mls' or 'diffusion', got {smoother!r}")
+    levels = positive(levels, "levels", integer=True, maximum=MAX_LEVELS)
+    if levels < 2:
+        raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
+    decimation = _decimation_option(decimation)
+    kernel = kernel_option(kernel)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
+    tolerance = positive(tolerance, "tolerance")
+    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
+    max_variation = positive(max_variation, "max_variation")
+    diffusion = None
+    if smoother == "diffusion":
+        diffusion = smoother_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
+    need = _points_needed(levels, decimation, "decompose_rayshoot")
+    p = as_points(points)
+    if len(p) < need:
+        raise ValueError(f"decompose_rayshoot needs at least {need} points for levels={levels} and "
+                         f"decimation={decimation}; got {len(p)}")
+    require_surface(p)
+    n_arr = as_normals_of(normals, p)
+    limit = 0.0 if max_distance is None else positive(max_distance, "max_distance")
+    fine_kernel = kernel_option(fine_kernel, "fine_kernel")
+    origin = centre(p)
+    options = _core.DecomposeOptions(
+        levels=levels, decimation=decimation, kernel=kernel, max_variation=max_variation,
+        mls=_core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations))
+    # The rays take more iterations than the projections: a ray's first plane can lie far off.
+    rays = _core.RayOptions(neighbors=neighbors, max_iterations=max(max_iterations, 50), max_distance=limit)
+    model, missed = _core.decompose_rayshoot(p - origin, n_arr, options=options, diffusion=diffusion, rays=rays,
+                                             fine_kernel=fine_kernel, progress=as_callback(progress),
+                                             threads=thread_option(threads))
+    settings = dict(levels=levels, decimation=decimation, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
+                    max_iterations=max_iterations, max_variation=max_variation, smoother=smoother,
+                    encoding="rayshoot", rays_missed=[int(len(m)) for m in missed])
+    dec = Decomposition(model, origin, settings, _missed_rays=[np.asarray(m) for m in missed])
+    _require_finite_model(dec)
+    return dec
+
+
+def rays_missed_points(dec: Decomposition) -> list:
+    """Per band, the indices of points whose ray missed in decompose_rayshoot (empty lists
+    for a decomposition loaded from a file, which keeps only the counts in settings)."""
+    if not isinstance(dec, Decomposition):
+        raise ValueError(f"expected a pointscale.Decomposition, got {type(dec).__name__}")
+    if dec._missed_rays is None:
+        return [np.zeros(0, np.int32)] * dec.n_bands
+    return list(dec._missed_rays)

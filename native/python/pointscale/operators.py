@@ -8,38 +8,12 @@ import warnings
 import numpy as np
 
 from . import _core
-from ._checks import (MAX_DIFFUSION_ITERATIONS, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS, as_callback,
-                      as_normals_of, as_points, centre, finite_result, kernel_option, positive, require_extent, require_near,
-                      require_stable_diffusion, require_surface, set_threads)
-from .multiscale import MIN_COARSE_POINTS, Decomposition, _decimation_option, _points_needed, _require_finite_model
-
-
-def _diffusion_settings(lam, mu, taubin, neighbors):
-    """Checks the diffusion parameters; returns (neighbors, lam, mu)."""
-    lam = positive(lam, "lam")
-    if not 1e-3 <= lam <= 1.0:
-        raise ValueError(f"lam must be in [0.001, 1] for a stable explicit step, got {lam}")
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3, maximum=MAX_NEIGHBORS)
-    if mu is None:
-        mu = _core.taubin_mu(lam, 0.1) if taubin else 0.0
-    else:
-        try:
-            if isinstance(mu, (bool, np.bool_)):
-                raise TypeError
-            mu = float(mu)
-        except (TypeError, ValueError):
-            raise ValueError(f"mu must be a number below -lam, got {mu!r}") from None
-        if not np.isfinite(mu) or mu >= -lam or mu < -1e3:
-            raise ValueError(f"mu must be below -lam = {-lam} (Taubin's inflating step) and at least -1000, got {mu}")
-    return neighbors, lam, mu
-
-
-def _diffusion_options(iterations, lam, taubin, neighbors) -> tuple:
-    """The core's (neighbors, lam, mu, iterations) for the "diffusion" smoother of a decomposition."""
-    k, lam, mu = _diffusion_settings(lam, None, taubin, neighbors)
-    iterations = positive(iterations, "diffusion_iterations", integer=True, maximum=MAX_DIFFUSION_ITERATIONS)
-    require_stable_diffusion(lam, mu, iterations, "diffusion_iterations")
-    return (k, lam, mu, iterations)
+from ._checks import (MAX_DIFFUSION_ITERATIONS, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS, as_callback, as_normals_of, as_points,
+                      centre, finite_result, kernel_option, positive, require_extent, require_near,
+                      require_stable_diffusion, require_surface, thread_option)
+from ._diffusion import diffusion_settings
+from .multiscale import MIN_COARSE_POINTS, Decomposition, _require_finite_model
+from .multiscale import decompose_rayshoot, rays_missed_points  # noqa: F401  (still importable from here)
 
 
 def smooth_diffusion(points, iterations: int = 10, *, lam: float = 0.5, taubin: bool = False, mu=None,
@@ -60,13 +34,13 @@ def smooth_diffusion(points, iterations: int = 10, *, lam: float = 0.5, taubin: 
     Returns the smoothed (n, 3) points, indexed like the input.
     """
     iterations = positive(iterations, "iterations", integer=True, maximum=MAX_DIFFUSION_ITERATIONS)
-    neighbors, lam, mu = _diffusion_settings(lam, mu, taubin, neighbors)
+    neighbors, lam, mu = diffusion_settings(lam, mu, taubin, neighbors)
     require_stable_diffusion(lam, mu, iterations)
     p = as_points(points, min_count=neighbors)
     require_extent(p, minimum=False)
     origin = centre(p)
-    set_threads(threads)
-    out = _core.diffuse(p - origin, neighbors, lam, mu, iterations, as_callback(progress)) + origin
+    options = _core.DiffusionOptions(neighbors=neighbors, lam=lam, mu=mu, iterations=iterations)
+    out = _core.diffuse(p - origin, options, progress=as_callback(progress), threads=thread_option(threads)) + origin
     return finite_result(out, "the smoothed points")
 
 
@@ -81,7 +55,7 @@ def diffusion_levels(points, levels: int = 4, *, iterations: int = 10, growth: f
     levels = positive(levels, "levels", integer=True, minimum=2, maximum=MAX_LEVELS)
     iterations = positive(iterations, "iterations", integer=True, maximum=MAX_DIFFUSION_ITERATIONS)
     growth = positive(growth, "growth", minimum=1.0, maximum=1e3)
-    neighbors, lam, mu = _diffusion_settings(lam, mu, taubin, neighbors)
+    neighbors, lam, mu = diffusion_settings(lam, mu, taubin, neighbors)
     # The steps per level grow geometrically: bound their sum, like smooth_diffusion's iterations.
     total = sum(float(np.round(iterations * growth ** step)) for step in range(levels - 1))
     if total > MAX_DIFFUSION_ITERATIONS:
@@ -92,11 +66,12 @@ def diffusion_levels(points, levels: int = 4, *, iterations: int = 10, growth: f
     p = as_points(points, min_count=neighbors)
     require_extent(p, minimum=False)
     origin = centre(p)
-    set_threads(threads)
+    threads = thread_option(threads)
     out = [p - origin]
     for step in range(levels - 1):
         steps = int(round(iterations * growth ** step))
-        out.append(_core.diffuse(out[-1], neighbors, lam, mu, steps, None))
+        options = _core.DiffusionOptions(neighbors=neighbors, lam=lam, mu=mu, iterations=steps)
+        out.append(_core.diffuse(out[-1], options, threads=threads))
     levels_out = np.stack(out[::-1]) + origin
     levels_out[-1] = p  # the input itself, without a centring round trip
     return finite_result(levels_out, "the diffusion levels")
@@ -132,9 +107,10 @@ def project_sheets(points, onto, *, kernel: float = 1.0, sheet: float = 0.2, ont
         if not np.isfinite(nrm).all():
             raise ValueError("onto_normals has vectors too short to normalise")
     origin = centre(s)
-    set_threads(threads)
-    pos, n, not_converged, degenerate = _core.project_sheets(x - origin, s - origin, nrm, kernel, neighbors,
-                                                             tolerance, max_iterations, sheet, as_callback(progress))
+    mls = _core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations)
+    pos, n, not_converged, degenerate = _core.project_sheets(x - origin, s - origin, onto_normals=nrm, kernel=kernel,
+                                                             mls=mls, sheet=sheet, progress=as_callback(progress),
+                                                             threads=thread_option(threads))
     pos = finite_result(pos + origin, "the projection")
     finite_result(n, "the projection's normals")
     if return_report:
@@ -170,9 +146,10 @@ def shoot_rays(origins, directions, onto, *, kernel: float = 1.0, neighbors: int
     limit = 0.0 if max_distance is None else positive(max_distance, "max_distance")
     tolerance = positive(tolerance, "tolerance")
     max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
-    set_threads(threads)
-    hits, dist, missed = _core.shoot_rays(o - origin, unit, s - origin, kernel, neighbors, tolerance,
-                                          max_iterations, limit, 0.05)
+    rays = _core.RayOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations,
+                            max_distance=limit, min_cosine=0.05)
+    hits, dist, missed = _core.shoot_rays(o - origin, unit, s - origin, kernel=kernel, options=rays,
+                                          threads=thread_option(threads))
     return finite_result(hits + origin, "the ray hits"), finite_result(dist, "the ray distances"), missed
 
 
@@ -198,7 +175,7 @@ def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neigh
     """
     if faces is not None or edges is not None:
         from .parts import connected_parts
-        labels, count = connected_parts(as_points(points), faces, edges)
+        labels, count = connected_parts(as_points(points), faces, edges, threads=threads)
         if count > 1:
             options = dict(base_normals=base_normals, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
                            max_iterations=max_iterations, max_variation=max_variation, threads=threads)
@@ -214,9 +191,11 @@ def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neigh
     max_variation = positive(max_variation, "max_variation")
     bn = as_normals_of(base_normals, b, "base_normals", "base_points")
     origin = centre(np.vstack([p, b]))
-    set_threads(threads)
-    model = _core.encode(p - origin, b - origin, bn, kernel, neighbors, tolerance, max_iterations, max_variation,
-                         as_callback(progress))
+    options = _core.EncodeOptions(
+        kernel=kernel, max_variation=max_variation,
+        mls=_core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations))
+    model = _core.encode(p - origin, b - origin, base_normals=bn, options=options, progress=as_callback(progress),
+                         threads=thread_option(threads))
     settings = dict(levels=2, encoding="base", kernel=kernel, neighbors=neighbors, tolerance=tolerance,
                     max_iterations=max_iterations, max_variation=max_variation, base_points=len(b))
     dec = Decomposition(model, origin, settings)
@@ -242,7 +221,8 @@ def _encode_by_part(points, base_points, labels, count, options, progress) -> De
             return encode(part_points, b, progress=part_progress, **options)
 
     arrays, stats, reports, message = encode_by_part(p, labels, count, encode_one, neighbors, MIN_COARSE_POINTS,
-                                                     as_callback(progress), origin)
+                                                     as_callback(progress), origin,
+                                                     threads=thread_option(options["threads"]))
     settings = dict(levels=2, encoding="base", kernel=options["kernel"], neighbors=neighbors,
                     tolerance=options["tolerance"], max_iterations=options["max_iterations"],
                     max_variation=options["max_variation"], base_points=len(b), parts=reports)
@@ -266,68 +246,3 @@ def ellipsoid_base(points_a, points_b=None, n: int = 20000) -> np.ndarray:
         raise ValueError(f"the bounding box is flat (extent {2 * axes}): it holds no ellipsoid")
     from .shapes import fibonacci_sphere
     return 0.5 * (lo + hi) + fibonacci_sphere(n) * axes
-
-
-def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decimation: float = 0.25,
-                       kernel: float = 1.0, normals=None, neighbors: int = 24, tolerance: float = 1e-7,
-                       max_iterations: int = 30, max_variation: float = 0.05, diffusion_iterations: int = 10,
-                       lam: float = 0.5, taubin: bool = True, diffusion_neighbors: int = 10,
-                       fine_kernel: float = 0.5, max_distance=None, threads: int = 0,
-                       progress=None) -> Decomposition:
-    """Multiscale decomposition with bottom-up ray-shooting encoding (Sec. 6.1).
-
-    The scale space is built as in decompose() (smoother "mls": decimate and project, Sec. 7;
-    "diffusion": the decimated support is diffused first, Sec. 5.1, with diffusion_iterations,
-    lam, taubin and diffusion_neighbors). Then P^0 is kept and every finer level is where rays from
-    the level below, along its normals, meet the next finer surface. The finest level therefore
-    resamples the input's MLS surface: reconstruct() gives it back exactly, not the input points.
-    settings["rays_missed"] counts, per band, rays that found no surface (these fall back to the
-    orthogonal projection of their origin, so those points of the finest level may lie off the
-    input surface); rays_missed_points(dec) lists them, and stats[l]["not_converged"] repeats
-    the count per level.
-    fine_kernel  kernel of the input's own MLS surface, which the finest level resamples, as a
-                 multiple of the input's spacing: small, so that it stays close to the samples
-    """
-    if smoother not in ("mls", "diffusion"):
-        raise ValueError(f"smoother must be 'mls' or 'diffusion', got {smoother!r}")
-    levels = positive(levels, "levels", integer=True, maximum=MAX_LEVELS)
-    if levels < 2:
-        raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
-    decimation = _decimation_option(decimation)
-    kernel = kernel_option(kernel)
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
-    tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
-    max_variation = positive(max_variation, "max_variation")
-    diffusion = None
-    if smoother == "diffusion":
-        diffusion = _diffusion_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
-    need = _points_needed(levels, decimation, "decompose_rayshoot")
-    p = as_points(points)
-    if len(p) < need:
-        raise ValueError(f"decompose_rayshoot needs at least {need} points for levels={levels} and "
-                         f"decimation={decimation}; got {len(p)}")
-    require_surface(p)
-    n_arr = as_normals_of(normals, p)
-    limit = 0.0 if max_distance is None else positive(max_distance, "max_distance")
-    fine_kernel = kernel_option(fine_kernel, "fine_kernel")
-    origin = centre(p)
-    set_threads(threads)
-    model, missed = _core.decompose_rayshoot(p - origin, n_arr, levels, decimation, kernel, neighbors, tolerance,
-                                             max_iterations, max_variation, diffusion, limit, fine_kernel,
-                                             as_callback(progress))
-    settings = dict(levels=levels, decimation=decimation, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
-                    max_iterations=max_iterations, max_variation=max_variation, smoother=smoother,
-                    encoding="rayshoot", rays_missed=[int(len(m)) for m in missed])
-    dec = Decomposition(model, origin, settings)
-    _require_finite_model(dec)
-    dec._cache["rays_missed_points"] = [np.asarray(m) for m in missed]
-    return dec
-
-
-def rays_missed_points(dec: Decomposition) -> list:
-    """Per band, the indices of points whose ray missed in decompose_rayshoot (empty lists
-    for a decomposition loaded from a file, which keeps only the counts in settings)."""
-    if not isinstance(dec, Decomposition):
-        raise ValueError(f"expected a pointscale.Decomposition, got {type(dec).__name__}")
-    return list(dec._cache.get("rays_missed_points", [np.zeros(0, np.int32)] * dec.n_bands))

@@ -50,19 +50,19 @@ def connectivity_pairs(n: int, faces=None, edges=None) -> np.ndarray | None:
     return np.ascontiguousarray(pairs, dtype=np.int32)
 
 
-def connected_parts(points, faces=None, edges=None) -> tuple[np.ndarray, int]:
+def connected_parts(points, faces=None, edges=None, *, threads: int = 0) -> tuple[np.ndarray, int]:
     """The parts that faces or edges connect: (labels (n,) int32, count).
 
     Parts are numbered in the order of their lowest vertex in a face or edge. A vertex in no
     face or edge (a scan's untriangulated point) joins the part of its nearest vertex that is
-    in one; with no faces and no edges everything is one part.
+    in one; with no faces and no edges everything is one part. threads: as decompose's.
     """
-    from ._checks import as_points
+    from ._checks import as_points, thread_option
     p = as_points(points)
     pairs = connectivity_pairs(len(p), faces, edges)
     if pairs is None:
         return np.zeros(len(p), dtype=np.int32), 1
-    labels, count = _core.connected_parts(p, pairs)
+    labels, count = _core.connected_parts(p, pairs, threads=thread_option(threads))
     return labels, int(count)
 
 
@@ -119,8 +119,9 @@ def levels_kept(sizes: np.ndarray, levels: int, decimation: float, neighbors: in
 
 
 def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, levels: int, decimation: float,
-                    neighbors: int, minimum: int, decompose_one, progress, origin: np.ndarray):
+                    neighbors: int, minimum: int, decompose_one, progress, origin: np.ndarray, threads: int = 0):
     """Decomposes each part alone and joins them: (model arrays, stats, part reports).
+    threads: for the parts too small to decompose, which are joined here.
 
     decompose_one(points, normals, levels, progress) -> Decomposition decomposes one part.
     """
@@ -156,7 +157,7 @@ def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, leve
     if all(dec is None for _, dec, _ in parts):
         raise ValueError("no connected part large enough to decompose spans a surface (each is flat or on a line): "
                          "there is no detail to separate from a base")
-    arrays = _joined(p, normals, parts, k, neighbors, origin)
+    arrays = _joined(p, normals, parts, k, neighbors, origin, threads)
     arrays["parts"] = np.ascontiguousarray(labels, dtype=np.int32)
     reports = [_part_report(part, idx, dec, reason, levels, p) for part, (idx, dec, reason) in enumerate(parts)]
     stats = _joined_stats(parts, k, sizes)
@@ -172,7 +173,7 @@ def _spans_surface(points: np.ndarray) -> bool:
     return True
 
 
-def _joined(p, normals, parts, k, neighbors, origin) -> dict:
+def _joined(p, normals, parts, k, neighbors, origin, threads) -> dict:
     """One model's arrays from the parts' (see to_dict): each part's clusters follow the
     previous part's, and a part with fewer bands takes its smoothest level's support for the
     coarser levels, where its bands are zero."""
@@ -213,7 +214,7 @@ def _joined(p, normals, parts, k, neighbors, origin) -> dict:
     frozen = [idx for idx, dec, _ in parts if dec is None]
     if frozen:
         _frozen_parts(p, normals, frozen, k, neighbors, kernel_scale, origin, base, base_normals, labels, per_level,
-                      offsets)
+                      offsets, threads)
     out = dict(base=base, details=details, base_normals=base_normals, labels=labels)
     for l in range(k):
         out[f"neighborhoods_{l}"] = np.ascontiguousarray(np.concatenate(per_level[l]["neighborhoods"]), np.int32)
@@ -225,7 +226,7 @@ def _joined(p, normals, parts, k, neighbors, origin) -> dict:
 
 
 def _frozen_parts(p, normals, frozen, k, neighbors, kernel_scale, origin, base, base_normals, labels, per_level,
-                  offsets) -> None:
+                  offsets, threads) -> None:
     """The parts with no bands, all at once: every level is the part itself. Each point is its
     own cluster, with its nearest points of its part as neighbours, so that its normals are
     fitted on the part alone; they only orient it, since nothing is displaced along them.
@@ -236,7 +237,7 @@ def _frozen_parts(p, normals, frozen, k, neighbors, kernel_scale, origin, base, 
     m = len(idx)
     base[idx] = points - origin
     base_normals[idx] = _part_normals(points, part, len(frozen), None if normals is None else normals[idx])
-    rows = _core.knn_within_parts(points, part, neighbors).astype(np.int64)
+    rows = _core.knn_within_parts(points, part, k=neighbors, threads=threads).astype(np.int64)
     own = np.arange(m)
     for l in range(k):
         labels[l, idx] = offsets[l] + own

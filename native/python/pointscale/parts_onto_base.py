@@ -18,17 +18,17 @@ _NO_DECIMATION = 1.0
 
 
 def encode_by_part(p: np.ndarray, labels: np.ndarray, count: int, encode_one, neighbors: int, minimum: int,
-                   progress, origin: np.ndarray):
+                   progress, origin: np.ndarray, threads: int = 0):
     """(model arrays, stats, part reports, warning) of encode_one(points, progress) for each part."""
     def one(points, _normals, _levels, part_progress):
         return encode_one(points, part_progress)
 
     arrays, stats, reports = decompose_parts(p, None, labels, count, 2, _NO_DECIMATION, neighbors, minimum, one,
-                                             progress, origin)
+                                             progress, origin, threads=threads)
     return arrays, stats, reports, parts_warning(reports, 2)
 
 
-def matched_parts(a: np.ndarray, b: np.ndarray, faces_a, edges_a, faces_b, edges_b):
+def matched_parts(a: np.ndarray, b: np.ndarray, faces_a, edges_a, faces_b, edges_b, threads: int = 0):
     """The parts of A and of B, matched by number: (labels_a, labels_b, count). Raises ValueError
     when only one model has connectivity, or when their part counts differ."""
     given_a = faces_a is not None or edges_a is not None
@@ -36,8 +36,8 @@ def matched_parts(a: np.ndarray, b: np.ndarray, faces_a, edges_a, faces_b, edges
     if given_a != given_b:
         raise ValueError("morph keeps parts apart only with the connectivity of both models: give faces or edges "
                          "for A and for B, or for neither")
-    labels_a, count_a = connected_parts(a, faces_a, edges_a)
-    labels_b, count_b = connected_parts(b, faces_b, edges_b)
+    labels_a, count_a = connected_parts(a, faces_a, edges_a, threads=threads)
+    labels_b, count_b = connected_parts(b, faces_b, edges_b, threads=threads)
     if count_a != count_b:
         raise ValueError(f"A has {count_a} connected parts and B has {count_b}: morph matches part i of A with part "
                          "i of B, so both need the same parts (or morph them without faces and edges)")

@@ -5,7 +5,7 @@ import numpy as np
 
 from . import _core
 from ._checks import (MAX_ITERATIONS, MAX_NEIGHBORS, as_callback, as_points, centre, finite_result, kernel_option,
-                      positive, require_extent, require_near, require_surface, set_threads)
+                      positive, require_extent, require_near, require_surface, thread_option)
 
 
 def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance: float = 1e-9,
@@ -54,11 +54,12 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
     if not isinstance(single_pass, (bool, np.bool_)):
         raise ValueError(f"single_pass must be True or False, got {single_pass!r}")
     origin = centre(s)
-    set_threads(threads)
+    threads = thread_option(threads)
     if single_pass:
-        return _single_pass(x, s, origin, kernel, neighbors, tolerance, progress, return_report)
-    pos, nrm, not_converged, degenerate = _core.project(x - origin, s - origin, kernel, neighbors, tolerance,
-                                                        max_iterations, as_callback(progress), near)
+        return _single_pass(x, s, origin, kernel, neighbors, tolerance, progress, return_report, threads)
+    mls = _core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations)
+    pos, nrm, not_converged, degenerate = _core.project(x - origin, s - origin, kernel=kernel, mls=mls,
+                                                        progress=as_callback(progress), near=near, threads=threads)
     pos = finite_result(pos + origin, "the projection")
     finite_result(nrm, "the projection's normals")
     if return_report:
@@ -66,12 +67,13 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
     return pos, nrm
 
 
-def _single_pass(x, s, origin, kernel, neighbors, tolerance, progress, return_report):
+def _single_pass(x, s, origin, kernel, neighbors, tolerance, progress, return_report, threads):
     # Projecting a cloud onto itself (smoothing it) lets the core take every point's
     # neighbours from one all-points query (self_knn.h) instead of a tree query each.
     same = x.shape == s.shape and np.array_equal(x, s)
     pos, nrm, moved, next_step, degenerate = _core.project_single_pass(
-        None if same else x - origin, s - origin, kernel, neighbors, same, bool(return_report), as_callback(progress))
+        None if same else x - origin, s - origin, kernel=kernel, neighbors=neighbors, self=same,
+        estimate=bool(return_report), progress=as_callback(progress), threads=threads)
     pos = finite_result(pos + origin, "the projection")
     finite_result(nrm, "the projection's normals")
     if not return_report:
@@ -99,7 +101,7 @@ def decimate(points, target: int, *, max_variation: float = 0.05):
     max_variation = positive(max_variation, "max_variation")
     require_extent(p, minimum=False)
     origin = centre(p)
-    c, labels = _core.decimate(p - origin, target, max_variation)
+    c, labels = _core.decimate(p - origin, target=target, max_variation=max_variation)
     return finite_result(c + origin, "the centroids"), labels
 
 
@@ -109,5 +111,6 @@ def estimate_normals(points, neighbors: int = 16, *, orient: bool = True, thread
     neighbors = positive(neighbors, "neighbors", integer=True, minimum=3, maximum=MAX_NEIGHBORS)
     p = as_points(points, min_count=neighbors)
     require_surface(p, allow_planar=True)
-    set_threads(threads)
-    return finite_result(_core.estimate_normals(p - centre(p), neighbors, bool(orient)), "the normals")
+    normals = _core.estimate_normals(p - centre(p), neighbors=neighbors, orient=bool(orient),
+                                     threads=thread_option(threads))
+    return finite_result(normals, "the normals")

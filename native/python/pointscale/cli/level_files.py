@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core
-from .._checks import centre, set_threads
+from .._checks import centre, thread_option
 
 # Neighbours of the PCA normals of the finest level, the one level the model stores no normals for.
 FINEST_NORMAL_NEIGHBORS = 16
@@ -14,8 +14,8 @@ def finest_normals(points: np.ndarray, reference: np.ndarray, threads: int) -> n
     """Unit normals of the finest level (n, 3): PCA normals of its own points, each turned to the
     side of `reference`, the normals (n, 3) of the level below at the same point. The input's
     normals are not reused: after a filter or an edit they no longer describe the surface."""
-    set_threads(threads)
-    normals = _core.estimate_normals(points - centre(points), FINEST_NORMAL_NEIGHBORS, False)
+    normals = _core.estimate_normals(points - centre(points), neighbors=FINEST_NORMAL_NEIGHBORS, orient=False,
+                                     threads=thread_option(threads))
     flip = np.einsum("ij,ij->i", normals, reference) < 0
     normals[flip] *= -1.0
     return normals
@@ -25,9 +25,8 @@ def reconstruct_with_normals(dec, gains, base, threads: int, progress):
     """(finest level (n, 3), normals (n, 3) of the level below it) of reconstruct(dec, gains, base):
     the same points, plus what finest_normals() orients the result's normals by."""
     from ..multiscale import _base_array, _gains_array
-    set_threads(threads)
-    levels, normals = dec._model.reconstruct(_gains_array(dec, gains), _base_array(dec, base), True, -1, progress,
-                                             dec.origin)
+    levels, normals = dec._reconstruct(_gains_array(dec, gains), _base_array(dec, base), keep_levels=True,
+                                       progress=progress, threads=thread_option(threads))
     return levels[-1], normals[-1]
 
 

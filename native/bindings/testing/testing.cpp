@@ -1,0 +1,73 @@
+// pointscale._testing: the core's internals for the tests and bench/, kept out of the _core
+// module the package runs on. self_knn's rows are checked against a brute-force search, the
+// kd-tree's rows are what self_knn replaced (bench/knn_bench.py), and normals can be oriented
+// with another graph width than the package's (tests/test_normals.py).
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+#include "../bindings.h"
+#include "pointscale/oriented_normals.h"
+#include "pointscale/parallel.h"
+#include "pointscale/self_knn.h"
+#include "pointscale/spatial_index.h"
+
+namespace py = pybind11;
+using namespace pointscale;
+using namespace pointscale_bindings;
+
+namespace {
+
+// (#P by k indices, #P by k squared distances) of every point's k nearest among `points`,
+// which fill(index, rows, distances) writes straight into the NumPy arrays (no copy to time).
+template <class Fill>
+py::tuple knn_rows(const DoubleArray& points, int k, int threads, const Fill& fill) {
+  Points p = to_points(points);
+  if (k < 1 || k > p.rows()) throw py::value_error("k must be between 1 and the number of points");
+  const std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(p.rows()), k};
+  py::array_t<Index> nearest(shape);
+  py::array_t<double> d2(shape);
+  Index* rows = nearest.mutable_data();
+  double* dist = d2.mutable_data();
+  without_gil(threads, [&] {
+    fill(SpatialIndex(p), rows, dist);
+    return 0;
+  });
+  return py::make_tuple(nearest, d2);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_testing, m) {
+  m.doc() = "The core's internals for tests and benchmarks; not part of pointscale's API.";
+
+  // Every point's k nearest among the points themselves (the rows decompose's kNN passes use).
+  m.def("self_knn", [](const DoubleArray& points, int k, int threads) {
+    return knn_rows(points, k, threads, [&](const SpatialIndex& index, Index* rows, double* dist) {
+      self_knn(index, k, [&](Index i, const Index* idx, const double* d, int found) {
+        std::copy(idx, idx + found, rows + static_cast<std::size_t>(i) * k);
+        std::copy(d, d + found, dist + static_cast<std::size_t>(i) * k);
+      });
+    });
+  }, py::arg("points"), py::arg("k"), py::arg("threads") = 0);
+
+  // The same rows from a kd-tree query per point.
+  m.def("kdtree_knn", [](const DoubleArray& points, int k, int threads) {
+    return knn_rows(points, k, threads, [&](const SpatialIndex& index, Index* rows, double* dist) {
+      parallel_for(static_cast<std::size_t>(index.size()), [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i)
+          index.knn(index.points().row(static_cast<Eigen::Index>(i)).data(), k, rows + i * k, dist + i * k);
+      });
+    });
+  }, py::arg("points"), py::arg("k"), py::arg("threads") = 0);
+
+  // Oriented normals with the orientation graph's width given (oriented_normals.h).
+  m.def("oriented_normals", [](const DoubleArray& points, int neighbors, int width, int threads) {
+    Points p = to_points(points);
+    return without_gil(threads, [&] { return oriented_normals(std::move(p), neighbors, width); });
+  }, py::arg("points"), py::arg("neighbors"), py::arg("width") = orientation_width, py::arg("threads") = 0);
+}
