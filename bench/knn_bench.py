@@ -21,7 +21,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import pointscale  # noqa: E402
-from pointscale import _core  # noqa: E402
+from pointscale import _testing  # noqa: E402
 from run import bumpy_sphere, morton_order, read_ply_xyz  # noqa: E402
 
 
@@ -40,7 +40,6 @@ def main() -> int:
     ap.add_argument("--reps", type=int, default=3)
     ap.add_argument("--data-dir", default=str(Path(__file__).resolve().parents[2] / "shared" / "data"))
     args = ap.parse_args()
-    _core.set_threads(args.threads)
 
     sets = []
     sphere = bumpy_sphere(1_000_000)
@@ -58,8 +57,8 @@ def main() -> int:
     print("|---|---|---|---|---|---|")
     for name, pts in sets:
         for k in (24, 40):
-            g, (gi, gd) = best(lambda: _core.self_knn(pts, k), args.reps)
-            t, (ti, td) = best(lambda: _core.kdtree_knn(pts, k), args.reps)
+            g, (gi, gd) = best(lambda: _testing.self_knn(pts, k, threads=args.threads), args.reps)
+            t, (ti, td) = best(lambda: _testing.kdtree_knn(pts, k, threads=args.threads), args.reps)
             same = bool(np.array_equal(gd, td))
             print(f"| {name} | {k} | {g:.3f} | {t:.3f} | {t / g:.2f}x | {same} |")
     return 0
