@@ -86,8 +86,7 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
   std::vector<double> moves(c_count, never), damping(c_count, 1.0), earlier(c_count, never);
   std::vector<unsigned char> pinned(c_count, 0), active(c_count, 0);
   // The anchors to move next (flagged in `active`), listed so that an iteration costs in
-  // proportion to them: a real scan takes hundreds of iterations over a few anchors each
-  // (the dragon: 305, 530 and 444 at 109k, 27k and 7k clusters).
+  // proportion to them: a real scan takes hundreds of iterations over a few anchors each.
   std::vector<Index> woken;
   auto wake_all = [&] {
     woken.resize(static_cast<std::size_t>(c_count));
@@ -165,9 +164,8 @@ Consistency make_offsets_normal(const Points& fine, Points& level, const LevelSu
   }
   Points().swap(anchors);  // level_normals takes its own copy
   // The iteration's temporaries go back to the system before the peak. This is the only trim
-  // in decompose: trims at the start of each step and after the decimation lowered no peak
-  // (1M points: 280-287 B/point either way), and the next step's arrays faulted the same pages
-  // in again (1M points: 157-186k page faults with them, 47-98k without; about 2 us each here).
+  // within a step: trims at its start and after the decimation lowered no peak, and the next
+  // step's arrays faulted the same pages in again.
   release_free_memory();
   // Unoriented: the move below does not depend on the sign, and decompose orients the
   // normals (and flips these details with them) once level 0 is known.
@@ -212,8 +210,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   std::vector<std::vector<signed char>> turns(k);  // turns[l]: sign of n_l . n_{l-1} per point
   // From the first decimation on, the points are numbered in the order of its clusters, which is
   // a spatial one: point i is input point original[i]. Every per-point pass then walks memory in
-  // order (1M points given in random order decompose about 10% faster when the caller sorts
-  // them). Loops whose sums depend on the order (the decimation's splits, the projection's
+  // order, whatever order the input comes in. Loops whose sums depend on the order (the decimation's splits, the projection's
   // query sharing, the anchors' ties) still visit the points in the input's order, so the model,
   // numbered back at the end, is bit for bit what the input's numbering gives.
   IndexList original;

@@ -123,9 +123,8 @@ void normals_at(Eigen::Index n, const Points* point_rows, const FillQueries& fil
       }
       pending.count = 0;
     };
-    // A cluster's members lie anywhere in the point order, and waiting for their rows from
-    // memory took most of this loop's time: fetch the rows of the cluster three ahead while
-    // this one works.
+    // A cluster's members lie anywhere in the point order, so this loop would wait on memory
+    // for their rows: fetch the rows of the cluster three ahead while this one works.
     auto prefetch = [&](std::size_t cc) {
       if (cc >= clusters) return;
       for (Index t = groups.offsets[cc]; t < groups.offsets[cc + 1]; ++t) {
@@ -380,7 +379,7 @@ std::vector<Mat3> transported_rotations(const Points& original, const Points& ed
       d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
       rotation[cc] = svd.matrixV() * d * svd.matrixU().transpose();
     }
-  }, {}, 64);  // level 0 has few clusters (1562 at 100k points): 1024 a chunk left one thread 2/3
+  }, {}, 64);  // small chunks: level 0 has few clusters, and large chunks would load the threads unevenly
   return rotation;
 }
 

@@ -40,9 +40,8 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   // d_k(x) around x lies inside R). So one query serves the foot while it moves, and, points
   // coming in Morton order, the points after it, until that test fails. The neighbours are
   // always those of a fresh query. With a support point near each point (decompose passes each
-  // point's cluster), the query is centred there instead, and serves the points around it:
-  // at 1M points, 446k queries in the three projections of a decomposition, 1.13M in Morton
-  // order. Decompose also hands over the support's rows (support_neighbours.h), which answer
+  // point's cluster), the query is centred there instead, and serves the points around it,
+  // which takes fewer queries than the Morton order. Decompose also hands over the support's rows (support_neighbours.h), which answer
   // the queries centred on support points without the tree.
   const IndexList* near = options.near_support && options.near_support->size() == static_cast<std::size_t>(n)
                               ? options.near_support : nullptr;

@@ -46,8 +46,8 @@ struct ReconstructionWorkspace {
 // base      #P by 3 edited P^0, or nullptr for the stored one (whose normals are then read from
 //           the model, bit for bit what fitting them again gives)
 // upto      reconstruct levels 0..upto only (upto <= k)
-// workspace storage kept between calls, or nullptr: arrays allocated afresh each call cost a
-//           page fault per 4 KB on first touch (1300 faults, 2-3 ms, at 100k points)
+// workspace storage kept between calls, or nullptr (arrays allocated afresh each call fault
+//           their pages in again on first touch)
 Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
                            bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr,
                            ReconstructionWorkspace* workspace = nullptr);
@@ -59,7 +59,7 @@ Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::
 
 // What an edited reconstruction needs beyond the model (edit_rotations.h), found from the
 // model alone: each base point's ring and its plane, and each point's foot (from the model's
-// own unedited reconstruction). About 0.3 of a decomposition's time; kept in the workspace.
+// own unedited reconstruction). Kept in the workspace, since it is costly to find.
 EditSupport edit_support(const MultiscaleModel& model);
 
 // The level loop that both of the above and Reconstructor run, on p (P^0 in, the finest level
