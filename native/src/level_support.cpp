@@ -16,6 +16,7 @@
 #include "pointscale/plane_fit.h"
 #include "pointscale/spatial_order.h"
 #include "pointscale/stencil_plane.h"
+#include "pointscale/detail/cluster_layout.h"
 
 namespace pointscale {
 
@@ -242,9 +243,8 @@ void attach_frames(const Points& centroids, const Points& positions, LevelSuppor
     support.frames[2 * static_cast<std::size_t>(c)] = a;
     support.frames[2 * static_cast<std::size_t>(c) + 1] = b;
   }
-  // In cluster order (level_support.h): row t for point members[t].
-  const LabelGroups own = groups ? LabelGroups() : group_by_label(support.labels.data(), support.labels.size(),
-                                                                   support.clusters);
+  // In the layout of cluster_layout.h: row t for point members[t].
+  const LabelGroups own = groups ? LabelGroups() : cluster_layout(support.labels, support.clusters);
   const LabelGroups& g = groups ? *groups : own;
   support.local.resize(positions.rows(), 3);
   parallel_for(static_cast<std::size_t>(support.clusters), [&](std::size_t b, std::size_t e) {

@@ -20,9 +20,9 @@ struct LevelSupport {
   IndexList neighborhoods;   // #C by K nearest clusters of each cluster, itself first
   Eigen::VectorXd h;         // #C kernel width of each cluster
   IndexList frames;          // #C by 2: the neighbour clusters that span each cluster's frame
-  // #P by 3: each point's query position in its cluster's frame, in cluster order: row t
-  // belongs to point group_by_label(labels).members[t] (spatial_order.h), so that the normals
-  // of a cluster's members read consecutive rows. local_by_point / local_from_points convert.
+  // #P by 3: each point's query position in its cluster's frame, laid out by
+  // cluster_layout.h: row t belongs to point cluster_layout(labels).members[t].
+  // local_by_point / local_from_points convert.
   Points local;
 };
 
@@ -35,7 +35,7 @@ void local_from_points(const Points& by_point, LevelSupport& support);
 // normal does not depend on the point itself: this keeps the offsets-along-normals condition
 // solvable even where detail is larger than the level's radius of curvature.
 // centroids #C by 3 from support_centroids(positions); positions #P by 3. groups: the points
-// grouped by support.labels (group_by_label), if the caller has them already.
+// grouped by support.labels in the layout of cluster_layout.h, if the caller has them already.
 void attach_frames(const Points& centroids, const Points& positions, LevelSupport& support,
                    const LabelGroups* groups = nullptr);
 
@@ -44,9 +44,9 @@ Points level_normals(const Points& level, const LevelSupport& support, const Poi
                      const ProgressStage& stage = {});
 
 // The same into `normals` (#P by 3), reusing its storage when it has the size already. For
-// calls over and over (Reconstructor), groups: the points
-// grouped by support.labels, the way support.local is stored (group_by_label, or the same
-// groups with the members renumbered alike), and centroids: storage for the anchors' rows.
+// calls over and over (Reconstructor), groups: the points grouped by support.labels in the
+// layout of cluster_layout.h (or the same groups with the members renumbered alike), and
+// centroids: storage for the anchors' rows.
 void level_normals(const Points& level, const LevelSupport& support, const Points& reference,
                    const ProgressStage& stage, Points& normals, const LabelGroups* groups = nullptr,
                    Points* centroids = nullptr);
