@@ -7,10 +7,15 @@
 
 #include "pointscale/parallel.h"
 #include "pointscale/plane_fit.h"
+#include "pointscale/detail/offset_damping.h"
 
 namespace pointscale {
 
 namespace {
+
+// A move more than a tenth above the last halves the step, down to 1/1024; a smaller move lets
+// it grow back by a quarter, up to the anchor's Newton step.
+constexpr DampingPolicy encode_damping{1.1, 1.0 / 1024.0, 1.25, false};
 
 // Moves p along the unit direction d onto the MLS surface: two ray-plane steps (Adamson and
 // Alexa 2003), enough for a point that slid a little off it within its tangent plane.
@@ -91,8 +96,7 @@ Alignment align_offsets(const Points& fine, Points& level, const LevelSupport& s
         const double full = move.norm();
         // A growing move means the step is too long: halve it. A shrinking one lets it grow back
         // towards the Newton step, so that noise in the neighbours' moves cannot stall an anchor.
-        if (full > 1.1 * moves[c]) damping[c] = std::max(damping[c] * 0.5, 1.0 / 1024.0);
-        else if (full < moves[c]) damping[c] = std::min(newton[c], damping[c] * 1.25);
+        damping[c] = next_damping(encode_damping, damping[c], full, moves[c], newton[c]);
         moves[c] = full;
         // A slide m leaves the surface by about m^2 curvature / 2: only larger ones need the step back.
         const Vec3 slid = p + damping[c] * move;

@@ -15,6 +15,7 @@
 #include "pointscale/detail/level_orientation.h"
 #include "pointscale/detail/level_turns.h"
 #include "pointscale/detail/make_offsets_normal.h"
+#include "pointscale/detail/mls_hints.h"
 
 // decompose builds the levels top-down, P^k = P, then P^{k-1}, ..., P^0; each step is
 //   decimate_level   P^l -> Q^{l-1}, its clusters (Sec. 5.2)
@@ -93,9 +94,10 @@ Projection project_level(const Points& fine, const Decimation& decimated, const 
   MlsOptions mls = options.mls;
   mls.order = &decimated.groups.members;
   mls.near_support = &decimated.clusters.labels;
-  mls.near_rows = &rows;
-  if (sheets.on) { mls.point_sides = &sheets.sides; mls.support_sides = &decimated.cluster_sides; }
-  out.projected = mls_project(fine, q_index, out.h, mls, stage);
+  MlsHints hints;
+  hints.near_rows = &rows;
+  if (sheets.on) { hints.point_sides = &sheets.sides; hints.support_sides = &decimated.cluster_sides; }
+  out.projected = mls_project(fine, q_index, out.h, mls, hints, stage);
   return out;
 }
 

@@ -8,12 +8,16 @@
 
 #include "pointscale/parallel.h"
 #include "pointscale/release_memory.h"
+#include "pointscale/detail/offset_damping.h"
 
 namespace pointscale {
 
 namespace {
 
 constexpr double never = std::numeric_limits<double>::infinity();
+
+// Halve the step while the move grows, down to 1/64, and regain it by half again otherwise.
+constexpr DampingPolicy decompose_damping{1.0, 1.0 / 64.0, 1.5, true};
 
 // The anchors to move next: only anchors that moved, or whose neighbours moved, can move again.
 // Flagged in `active` and listed in `woken`, so that an iteration costs in proportion to them:
@@ -88,9 +92,7 @@ void step_anchors(const Points& fine, Points& level, Points& anchors, const Leve
       const Vec3 p = level.row(i).transpose();
       const Vec3 target = f - (f - p).dot(nrm) * nrm;
       const double full = (target - p).norm();
-      // Halve the step while the move grows (a swing), regain it while the move shrinks.
-      steps.damping[c] = full > steps.moves[c] ? std::max(steps.damping[c] * 0.5, 1.0 / 64.0)
-                                               : std::min(1.0, steps.damping[c] * 1.5);
+      steps.damping[c] = next_damping(decompose_damping, steps.damping[c], full, steps.moves[c], 1.0);
       steps.moves[c] = full;
       level.row(i) = (p + steps.damping[c] * (target - p)).transpose();
       anchors.row(c) = level.row(i);
