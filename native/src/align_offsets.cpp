@@ -6,8 +6,9 @@
 #include <vector>
 
 #include "pointscale/parallel.h"
-#include "pointscale/plane_fit.h"
+#include "pointscale/detail/plane_fit.h"
 #include "pointscale/detail/offset_damping.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

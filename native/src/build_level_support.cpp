@@ -5,7 +5,8 @@
 
 #include "pointscale/sample_spacing.h"
 #include "pointscale/spatial_index.h"
-#include "pointscale/thin_sheets.h"
+#include "pointscale/detail/thin_sheets.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

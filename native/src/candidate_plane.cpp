@@ -1,10 +1,10 @@
-#include "pointscale/candidate_plane.h"
+#include "pointscale/detail/candidate_plane.h"
 
 #include <algorithm>
 #include <limits>
 
-#include "pointscale/fast_exp.h"
-#include "pointscale/simd_clones.h"
+#include "pointscale/detail/fast_exp.h"
+#include "pointscale/detail/simd_clones.h"
 
 namespace pointscale {
 

@@ -5,17 +5,18 @@
 #include <utility>
 
 #include "pointscale/cluster_decimation.h"
-#include "pointscale/release_memory.h"
-#include "pointscale/renumber_points.h"
+#include "pointscale/detail/release_memory.h"
+#include "pointscale/detail/renumber_points.h"
 #include "pointscale/spatial_index.h"
-#include "pointscale/support_neighbours.h"
-#include "pointscale/thin_sheets.h"
+#include "pointscale/detail/support_neighbours.h"
+#include "pointscale/detail/thin_sheets.h"
 #include "pointscale/detail/build_level_support.h"
 #include "pointscale/detail/cluster_layout.h"
 #include "pointscale/detail/level_orientation.h"
 #include "pointscale/detail/level_turns.h"
 #include "pointscale/detail/make_offsets_normal.h"
 #include "pointscale/detail/mls_hints.h"
+#include "pointscale/detail/level_normals.h"
 
 // decompose builds the levels top-down, P^k = P, then P^{k-1}, ..., P^0; each step is
 //   decimate_level   P^l -> Q^{l-1}, its clusters (Sec. 5.2)

@@ -9,6 +9,7 @@
 #include "pointscale/detail/base_normals.h"
 #include "pointscale/detail/build_level_support.h"
 #include "pointscale/detail/project_from_afar.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

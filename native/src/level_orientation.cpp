@@ -6,6 +6,7 @@
 
 #include "pointscale/normal_estimation.h"
 #include "pointscale/spatial_index.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

@@ -11,12 +11,13 @@
 #include <xmmintrin.h>  // _mm_prefetch (MSVC)
 #endif
 
-#include "pointscale/batched_eigen.h"
+#include "pointscale/detail/batched_eigen.h"
 #include "pointscale/parallel.h"
-#include "pointscale/plane_fit.h"
+#include "pointscale/detail/plane_fit.h"
 #include "pointscale/spatial_order.h"
-#include "pointscale/stencil_plane.h"
+#include "pointscale/detail/stencil_plane.h"
 #include "pointscale/detail/cluster_layout.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "pointscale/parallel.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

@@ -7,8 +7,9 @@
 #include <vector>
 
 #include "pointscale/parallel.h"
-#include "pointscale/release_memory.h"
+#include "pointscale/detail/release_memory.h"
 #include "pointscale/detail/offset_damping.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

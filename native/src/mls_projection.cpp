@@ -6,11 +6,11 @@
 #include <utility>
 #include <limits>
 
-#include "pointscale/candidate_plane.h"
+#include "pointscale/detail/candidate_plane.h"
 #include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
 #include "pointscale/spatial_order.h"
-#include "pointscale/thin_sheets.h"
+#include "pointscale/detail/thin_sheets.h"
 
 namespace pointscale {
 

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "pointscale/parallel.h"
-#include "pointscale/plane_fit.h"
+#include "pointscale/detail/plane_fit.h"
 
 namespace pointscale {
 

@@ -5,10 +5,11 @@
 
 #include "pointscale/cluster_decimation.h"
 #include "pointscale/parallel.h"
-#include "pointscale/plane_fit.h"
+#include "pointscale/detail/plane_fit.h"
 #include "pointscale/sample_spacing.h"
 #include "pointscale/detail/build_level_support.h"
 #include "pointscale/detail/level_orientation.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

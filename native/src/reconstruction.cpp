@@ -3,6 +3,7 @@
 #include <utility>
 
 #include "pointscale/parallel.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

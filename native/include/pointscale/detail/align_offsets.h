@@ -1,6 +1,6 @@
 // Making an encoded level's offsets normal (encode_onto, Sec. 8.2).
 #pragma once
-#include "pointscale/level_support.h"
+#include "pointscale/detail/level_normals.h"
 #include "pointscale/spatial_index.h"
 
 namespace pointscale {

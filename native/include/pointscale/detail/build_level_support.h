@@ -2,7 +2,7 @@
 // points, behind decompose, encode_onto and decompose_rayshoot: labels, then anchors, then the
 // anchors' neighbourhoods, kernel widths and frames.
 #pragma once
-#include "pointscale/level_support.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

@@ -2,7 +2,7 @@
 // the anchors around it and oriented by spanning-tree propagation (outward on closed shapes).
 // decompose orients level 0 this way, and decompose_rayshoot through orientation_reference.
 #pragma once
-#include "pointscale/level_support.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

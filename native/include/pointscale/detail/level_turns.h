@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-#include "pointscale/level_support.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

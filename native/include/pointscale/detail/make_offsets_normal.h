@@ -3,7 +3,7 @@
 // exactly along n^{l-1}(P^{l-1}), the normal that reconstruction recomputes from the level.
 #pragma once
 #include "pointscale/detail/cluster_layout.h"
-#include "pointscale/level_support.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 

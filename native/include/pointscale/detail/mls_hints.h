@@ -2,7 +2,7 @@
 // shared work that only it has, kept out of the public options.
 #pragma once
 #include "pointscale/mls_projection.h"
-#include "pointscale/support_neighbours.h"
+#include "pointscale/detail/support_neighbours.h"
 
 namespace pointscale {
 

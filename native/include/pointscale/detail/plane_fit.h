@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "pointscale/portable.h"
+#include "pointscale/detail/portable.h"
 #include "pointscale/types.h"
 
 namespace pointscale {
