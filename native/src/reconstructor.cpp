@@ -5,6 +5,7 @@
 #include "pointscale/parallel.h"
 #include "pointscale/spatial_order.h"
 #include "pointscale/detail/cluster_layout.h"
+#include "pointscale/detail/reconstruct_levels.h"
 
 namespace pointscale {
 
