@@ -7,7 +7,7 @@
 
 #include "pointscale/parallel.h"
 #include "pointscale/detail/plane_fit.h"
-#include "pointscale/detail/offset_damping.h"
+#include "pointscale/detail/offset_alignment.h"
 #include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
@@ -92,7 +92,7 @@ Alignment align_offsets(const Points& fine, Points& level, const LevelSupport& s
         const Vec3 nrm = normals.row(static_cast<Eigen::Index>(c)).transpose();
         const Vec3 f = fine.row(i).transpose();
         const Vec3 p = level.row(i).transpose();
-        const Vec3 target = f - (f - p).dot(nrm) * nrm;
+        const Vec3 target = tangent_foot(f, p, nrm);
         const Vec3 move = target - p;
         const double full = move.norm();
         // A growing move means the step is too long: halve it. A shrinking one lets it grow back
@@ -114,25 +114,20 @@ Alignment align_offsets(const Points& fine, Points& level, const LevelSupport& s
   Alignment out;
   out.iterations = it;
   const Points normals = level_normals(level, support, reference);
-  std::vector<unsigned char> is_anchor(static_cast<std::size_t>(level.rows()), 0);
-  for (Index a : support.anchors) is_anchor[a] = 1;
   std::vector<unsigned char> stays(static_cast<std::size_t>(level.rows()), 0);
   std::vector<double> left(static_cast<std::size_t>(level.rows()), 0.0);
-  parallel_for(static_cast<std::size_t>(level.rows()), [&](std::size_t b, std::size_t e) {
-    for (std::size_t ii = b; ii < e; ++ii) {
-      const Eigen::Index i = static_cast<Eigen::Index>(ii);
-      const Vec3 nrm = normals.row(i).transpose();
-      const Vec3 f = fine.row(i).transpose();
-      if (!is_anchor[ii]) {
-        const Vec3 target = f - (f - level.row(i).transpose()).dot(nrm) * nrm;
+  step_non_anchors(
+      fine, level, normals, support,
+      [&](Eigen::Index i, const Vec3& target, const Vec3& nrm) {
+        const std::size_t ii = static_cast<std::size_t>(i);
         if ((target - start.row(i).transpose()).norm() <= reach(i, support.labels[ii]))
           level.row(i) = settle(target, nrm).transpose();
         else stays[ii] = 1;
-      }
-      const Vec3 d = f - level.row(i).transpose();
-      left[ii] = (d - d.dot(nrm) * nrm).norm();
-    }
-  });
+      },
+      [&](Eigen::Index i, const Vec3& f, const Vec3& nrm) {
+        const Vec3 d = f - level.row(i).transpose();
+        left[static_cast<std::size_t>(i)] = (d - d.dot(nrm) * nrm).norm();
+      });
   for (Index c = 0; c < c_count; ++c) out.kept += kept[c];
   for (unsigned char s : stays) out.kept += s;
   out.residual = *std::max_element(left.begin(), left.end());

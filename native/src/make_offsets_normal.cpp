@@ -8,7 +8,7 @@
 
 #include "pointscale/parallel.h"
 #include "pointscale/detail/release_memory.h"
-#include "pointscale/detail/offset_damping.h"
+#include "pointscale/detail/offset_alignment.h"
 #include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
@@ -91,7 +91,7 @@ void step_anchors(const Points& fine, Points& level, Points& anchors, const Leve
       const Vec3 nrm = normals.row(static_cast<Eigen::Index>(j)).transpose();
       const Vec3 f = fine.row(i).transpose();
       const Vec3 p = level.row(i).transpose();
-      const Vec3 target = f - (f - p).dot(nrm) * nrm;
+      const Vec3 target = tangent_foot(f, p, nrm);
       const double full = (target - p).norm();
       steps.damping[c] = next_damping(decompose_damping, steps.damping[c], full, steps.moves[c], 1.0);
       steps.moves[c] = full;
@@ -160,17 +160,10 @@ Consistency settle_anchors(const Points& fine, Points& level, const LevelSupport
 void offsets_along_normals(const Points& fine, Points& level, const LevelSupport& support, const LabelGroups& layout,
                            Eigen::MatrixXd::RowXpr details, Points& normals) {
   level_normals(level, support, Points(), {}, normals, &layout);
-  std::vector<unsigned char> is_anchor(static_cast<std::size_t>(level.rows()), 0);
-  for (Index a : support.anchors) is_anchor[a] = 1;
-  parallel_for(static_cast<std::size_t>(level.rows()), [&](std::size_t b, std::size_t e) {
-    for (std::size_t ii = b; ii < e; ++ii) {
-      const Eigen::Index i = static_cast<Eigen::Index>(ii);
-      const Vec3 nrm = normals.row(i).transpose();
-      const Vec3 f = fine.row(i).transpose();
-      if (!is_anchor[ii]) level.row(i) = (f - (f - level.row(i).transpose()).dot(nrm) * nrm).transpose();
-      details(i) = (fine.row(i) - level.row(i)).dot(normals.row(i));
-    }
-  });
+  step_non_anchors(
+      fine, level, normals, support,
+      [&](Eigen::Index i, const Vec3& foot, const Vec3&) { level.row(i) = foot.transpose(); },
+      [&](Eigen::Index i, const Vec3&, const Vec3&) { details(i) = (fine.row(i) - level.row(i)).dot(normals.row(i)); });
 }
 
 }  // namespace
