@@ -66,7 +66,7 @@ inline void prefetch_line(const void* p) {
 // share (its frame). Works cluster by cluster: all members of a cluster are fitted to the
 // same neighbour clusters, gathered once.
 // point_rows: rows that fill_queries reads by query index, to prefetch; null if it reads none.
-// cached_groups: the queries grouped by query_labels (group_by_label, or any grouping with the same
+// cached_groups: the queries grouped by query_labels (cluster_layout.h, or any grouping with the same
 // groups), if the caller has them already.
 // only: if given, the clusters to work on (the others are skipped without a look), and
 // cached_groups, required then, groups the queries by place in that list.
@@ -261,7 +261,7 @@ void attach_frames(const Points& centroids, const Points& positions, LevelSuppor
 }
 
 Points local_by_point(const LevelSupport& support) {
-  const LabelGroups groups = group_by_label(support.labels.data(), support.labels.size(), support.clusters);
+  const LabelGroups groups = cluster_layout(support.labels, support.clusters);
   Points out(support.local.rows(), 3);
   for (std::size_t t = 0; t < groups.members.size(); ++t)
     out.row(groups.members[t]) = support.local.row(static_cast<Eigen::Index>(t));
@@ -269,7 +269,7 @@ Points local_by_point(const LevelSupport& support) {
 }
 
 void local_from_points(const Points& by_point, LevelSupport& support) {
-  const LabelGroups groups = group_by_label(support.labels.data(), support.labels.size(), support.clusters);
+  const LabelGroups groups = cluster_layout(support.labels, support.clusters);
   support.local.resize(by_point.rows(), 3);
   for (std::size_t t = 0; t < groups.members.size(); ++t)
     support.local.row(static_cast<Eigen::Index>(t)) = by_point.row(groups.members[t]);

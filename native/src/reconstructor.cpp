@@ -66,7 +66,7 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) {
     to.neighborhoods = from.neighborhoods;
     to.h = from.h;
     to.frames = from.frames;
-    to.local = from.local;  // rows in cluster order, which the renumbering below keeps
+    to.local = from.local;  // laid out by cluster_layout.h, which the renumbering below keeps
     to.labels.resize(from.labels.size());
     to.anchors.resize(from.anchors.size());
     for (std::size_t c = 0; c < from.anchors.size(); ++c) to.anchors[c] = rank[from.anchors[c]];
