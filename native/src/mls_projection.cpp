@@ -5,6 +5,7 @@
 #include <cmath>
 #include <utility>
 #include <limits>
+#include <stdexcept>
 
 #include "pointscale/detail/candidate_plane.h"
 #include "pointscale/normal_estimation.h"
@@ -22,6 +23,15 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
 MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen::VectorXd& h,
                       const MlsOptions& options, const MlsHints& hints, const ProgressStage& stage) {
   const Eigen::Index n = x.rows();
+  // An optional input of the wrong size is an error, not a reason to go without it.
+  const auto un = static_cast<std::size_t>(n);
+  if (options.order && options.order->size() != un)
+    throw std::invalid_argument("MlsOptions.order must list every point once");
+  if (options.near_support && options.near_support->size() != un)
+    throw std::invalid_argument("MlsOptions.near_support must have one entry per point");
+  if (!hints.point_sides != !hints.support_sides ||
+      (hints.point_sides && (hints.point_sides->rows() != n || hints.support_sides->rows() != support.size())))
+    throw std::invalid_argument("MlsHints: the sides of every point and every support point, or neither");
   const int k = std::min<int>(options.neighbors, support.size());
   const Points& s = support.points();
   const Eigen::VectorXd inv_h2 = h.array().square().inverse();
@@ -33,8 +43,7 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
     sheet_normals = &estimated;
   }
   const double sheet_extra = sheet_normals ? 1.0 / (options.sheet * options.sheet) - 1.0 : 0.0;
-  const bool sides = hints.point_sides && hints.support_sides && hints.point_sides->rows() == n &&
-                     hints.support_sides->rows() == support.size();
+  const bool sides = hints.point_sides != nullptr;
   MlsResult out;
   out.positions.resize(n, 3);
   out.normals.resize(n, 3);
@@ -50,8 +59,7 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   // which takes fewer queries than the Morton order. Decompose also hands over the support's
   // rows (support_neighbours.h, detail/mls_hints.h), which answer the queries centred on
   // support points without the tree.
-  const IndexList* near = options.near_support && options.near_support->size() == static_cast<std::size_t>(n)
-                              ? options.near_support : nullptr;
+  const IndexList* near = options.near_support;
   // Centred on a support point, a query must reach past the k nearest of every point around it.
   // With sides, about half the candidates face the other way: ask for twice as many.
   const int kc = std::min<int>(sides ? 2 * k + near_query_extra : near ? k + near_query_extra : k + 8, support.size());
@@ -60,7 +68,7 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   const SupportNeighbours* rows = near && hints.near_rows && hints.near_rows->width == kc &&
                                           hints.near_rows->reach.size() == support.size()
                                       ? hints.near_rows : nullptr;
-  const bool given = options.order && options.order->size() == static_cast<std::size_t>(n);
+  const bool given = options.order != nullptr;
   const IndexList own_order = given ? IndexList() : morton_order(x);
   const IndexList& order = given ? *options.order : own_order;
   const double everything = std::numeric_limits<double>::infinity();

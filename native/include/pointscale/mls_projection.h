@@ -20,7 +20,7 @@ struct MlsOptions {
   const Points* support_normals = nullptr;
   double sheet = 0.2;         // normal kernel width as a fraction of h, in (0, 1]
   bool thin_sheets = false;   // the same weights with normals estimated from 16 support neighbours
-  // The order in which the points are projected (spatial_order.h), or nullptr to compute a
+  // The order in which the points are projected (spatial_order.h; #X), or nullptr to compute a
   // Morton order; callers projecting the same points repeatedly compute it once.
   const IndexList* order = nullptr;
   // A support point near each point (#X, e.g. its decimation cluster's centroid), with the
@@ -44,6 +44,8 @@ struct MlsResult {
 // x        #X by 3 points to project
 // support  spatial index on the #S support points that define the surface
 // h        #S kernel widths, one per support point (weights exp(-r^2/h_j^2))
+// Throws std::invalid_argument when options.order or options.near_support is given with a
+// size other than #X.
 MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen::VectorXd& h,
                       const MlsOptions& options, const ProgressStage& stage = {});
 
