@@ -1,10 +1,10 @@
-#include "pointscale/angle_sorted_edges.h"
+#include "pointscale/detail/angle_sorted_edges.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include "pointscale/parallel.h"
-#include "pointscale/portable.h"
+#include "pointscale/detail/portable.h"
 
 namespace pointscale {
 

@@ -1,6 +1,6 @@
-#include "pointscale/batched_eigen.h"
+#include "pointscale/detail/batched_eigen.h"
 
-#include "pointscale/simd_clones.h"
+#include "pointscale/detail/simd_clones.h"
 
 namespace pointscale {
 

@@ -1,10 +1,10 @@
-#include "pointscale/candidate_plane.h"
+#include "pointscale/detail/candidate_plane.h"
 
 #include <algorithm>
 #include <limits>
 
-#include "pointscale/fast_exp.h"
-#include "pointscale/simd_clones.h"
+#include "pointscale/detail/fast_exp.h"
+#include "pointscale/detail/simd_clones.h"
 
 namespace pointscale {
 
@@ -57,7 +57,7 @@ PlaneFit fit_nearest_plane(CandidateSet& c, int k, const Vec3& foot, double& nea
     if (!prefix) {
       // The k-th smallest lies in [outer, inner]; the values below outer are all among the first
       // k, so it is the (k - below)-th smallest of the few values in that range (a short
-      // selection over them; a general one over all candidates took 8% of a decomposition).
+      // selection over them, not a general one over all candidates).
       double* __restrict in_range = c.e.data();  // free until the weights below
       int below = 0, m_in = 0;
       for (int j = 0; j < n; ++j) {

@@ -26,8 +26,7 @@ struct Cluster {
 };
 
 // The input's coordinates and indices, reordered as clusters split, so that every pass over a
-// cluster reads contiguous memory (through the input order, it waited on memory for most of
-// its time).
+// cluster reads contiguous memory (through the input order, it would wait on memory).
 struct Working {
   std::vector<double> xyz;  // 3 per point
   std::vector<Index> index;
@@ -179,9 +178,9 @@ void split_down(Cluster& c, Working& w, std::deque<Cluster>& store, std::size_t 
 
 // The open clusters, largest priority first. Priorities are whole numbers (a size, times 4 for a
 // curved cluster), so the small ones, which nearly all pops are, sit in buckets, one per value;
-// a binary heap over them waited on memory for most of the replay. Ties go last in, first out
-// (whichever order, the clusters left unsplit where the target is reached part way through a
-// bucket were spread evenly over a sphere: mean cluster size within 6% in every cell of a grid).
+// a binary heap over them would wait on memory. Ties go last in, first out (either order leaves
+// the clusters that stay unsplit, where the target is reached part way through a bucket, spread
+// evenly).
 class BestFirst {
  public:
   void push(Cluster* c) {

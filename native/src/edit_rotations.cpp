@@ -8,7 +8,7 @@
 
 #include "pointscale/connected_parts.h"
 #include "pointscale/parallel.h"
-#include "pointscale/plane_fit.h"
+#include "pointscale/detail/plane_fit.h"
 #include "pointscale/spatial_index.h"
 
 namespace pointscale {

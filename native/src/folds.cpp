@@ -95,8 +95,8 @@ inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std:
 // Whether the stored base's ring at slot s spreads along one line only (its tangent spread
 // across the line below on_a_line_spread of that along it): a strip of duplicated or collinear
 // scan points. Such a ring has no plane to turn over; its plane test would read the rounding
-// of a vanishing cross product and report folds that no limiter can undo (the dragon scan
-// has such strips).
+// of a vanishing cross product and report folds that no limiter can undo (real scans have such
+// strips).
 bool ring_on_a_line(const FoldReference& ref, std::uint16_t skip, Index s) {
   constexpr double on_a_line_spread = 1e-3;  // eigenvalue ratio: a ring about 30 times longer than wide
   const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;

@@ -11,11 +11,13 @@
 #include <xmmintrin.h>  // _mm_prefetch (MSVC)
 #endif
 
-#include "pointscale/batched_eigen.h"
+#include "pointscale/detail/batched_eigen.h"
 #include "pointscale/parallel.h"
-#include "pointscale/plane_fit.h"
+#include "pointscale/detail/plane_fit.h"
 #include "pointscale/spatial_order.h"
-#include "pointscale/stencil_plane.h"
+#include "pointscale/detail/stencil_plane.h"
+#include "pointscale/detail/cluster_layout.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 
@@ -64,7 +66,7 @@ inline void prefetch_line(const void* p) {
 // share (its frame). Works cluster by cluster: all members of a cluster are fitted to the
 // same neighbour clusters, gathered once.
 // point_rows: rows that fill_queries reads by query index, to prefetch; null if it reads none.
-// cached_groups: the queries grouped by query_labels (group_by_label, or any grouping with the same
+// cached_groups: the queries grouped by query_labels (cluster_layout.h, or any grouping with the same
 // groups), if the caller has them already.
 // only: if given, the clusters to work on (the others are skipped without a look), and
 // cached_groups, required then, groups the queries by place in that list.
@@ -123,9 +125,8 @@ void normals_at(Eigen::Index n, const Points* point_rows, const FillQueries& fil
       }
       pending.count = 0;
     };
-    // A cluster's members lie anywhere in the point order, and waiting for their rows from
-    // memory took most of this loop's time: fetch the rows of the cluster three ahead while
-    // this one works.
+    // A cluster's members lie anywhere in the point order, so this loop would wait on memory
+    // for their rows: fetch the rows of the cluster three ahead while this one works.
     auto prefetch = [&](std::size_t cc) {
       if (cc >= clusters) return;
       for (Index t = groups.offsets[cc]; t < groups.offsets[cc + 1]; ++t) {
@@ -243,9 +244,8 @@ void attach_frames(const Points& centroids, const Points& positions, LevelSuppor
     support.frames[2 * static_cast<std::size_t>(c)] = a;
     support.frames[2 * static_cast<std::size_t>(c) + 1] = b;
   }
-  // In cluster order (level_support.h): row t for point members[t].
-  const LabelGroups own = groups ? LabelGroups() : group_by_label(support.labels.data(), support.labels.size(),
-                                                                   support.clusters);
+  // In the layout of cluster_layout.h: row t for point members[t].
+  const LabelGroups own = groups ? LabelGroups() : cluster_layout(support.labels, support.clusters);
   const LabelGroups& g = groups ? *groups : own;
   support.local.resize(positions.rows(), 3);
   parallel_for(static_cast<std::size_t>(support.clusters), [&](std::size_t b, std::size_t e) {
@@ -261,7 +261,7 @@ void attach_frames(const Points& centroids, const Points& positions, LevelSuppor
 }
 
 Points local_by_point(const LevelSupport& support) {
-  const LabelGroups groups = group_by_label(support.labels.data(), support.labels.size(), support.clusters);
+  const LabelGroups groups = cluster_layout(support.labels, support.clusters);
   Points out(support.local.rows(), 3);
   for (std::size_t t = 0; t < groups.members.size(); ++t)
     out.row(groups.members[t]) = support.local.row(static_cast<Eigen::Index>(t));
@@ -269,7 +269,7 @@ Points local_by_point(const LevelSupport& support) {
 }
 
 void local_from_points(const Points& by_point, LevelSupport& support) {
-  const LabelGroups groups = group_by_label(support.labels.data(), support.labels.size(), support.clusters);
+  const LabelGroups groups = cluster_layout(support.labels, support.clusters);
   support.local.resize(by_point.rows(), 3);
   for (std::size_t t = 0; t < groups.members.size(); ++t)
     support.local.row(static_cast<Eigen::Index>(t)) = by_point.row(groups.members[t]);
@@ -347,41 +347,6 @@ Points anchor_normals_of_clusters(const Points& centroids, const LevelSupport& s
              },
              labels.data(), centroids, support, Points(), {}, normals);
   return normals;
-}
-
-std::vector<Mat3> transported_rotations(const Points& original, const Points& edited, const LevelSupport& support) {
-  const Points b0 = support_centroids(original, support);
-  const Points b1 = support_centroids(edited, support);
-  const int k = support.neighbors;
-  // The rotation that best maps each cluster's neighbourhood from the original to the edited
-  // level (Kabsch). Unedited it is the identity, so the references are the stored normals.
-  std::vector<Mat3> rotation(static_cast<std::size_t>(support.clusters));
-  parallel_for(rotation.size(), [&](std::size_t b, std::size_t e) {
-    for (std::size_t cc = b; cc < e; ++cc) {
-      const Index c = static_cast<Index>(cc);
-      const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(c) * k;
-      const double h = support.h(c);
-      rotation[cc] = Mat3::Identity();
-      // A neighbourhood the edit left as it was keeps the identity exactly, without a solve.
-      bool same = b0.row(c) == b1.row(c);
-      for (int j = 1; j < k && same; ++j) same = b0.row(nb[j]) == b1.row(nb[j]);
-      if (same) continue;
-      Mat3 cov = Mat3::Zero();
-      for (int j = 1; j < k; ++j) {
-        const Vec3 e0 = (b0.row(nb[j]) - b0.row(c)).transpose();
-        const Vec3 e1 = (b1.row(nb[j]) - b1.row(c)).transpose();
-        cov.noalias() += std::exp(-e0.squaredNorm() / (h * h)) * e0 * e1.transpose();
-      }
-      const Eigen::JacobiSVD<Mat3> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      const Eigen::Vector3d s = svd.singularValues();
-      // A neighbourhood on a line does not fix the rotation about it: keep the identity there.
-      if (!(s(1) > 1e-9 * s(0))) continue;
-      Mat3 d = Mat3::Identity();
-      d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
-      rotation[cc] = svd.matrixV() * d * svd.matrixU().transpose();
-    }
-  }, {}, 64);  // level 0 has few clusters (1562 at 100k points): 1024 a chunk left one thread 2/3
-  return rotation;
 }
 
 }  // namespace pointscale

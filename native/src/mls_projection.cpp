@@ -1,21 +1,37 @@
 #include "pointscale/mls_projection.h"
+#include "pointscale/detail/mls_hints.h"
 
 #include <algorithm>
 #include <cmath>
 #include <utility>
 #include <limits>
+#include <stdexcept>
 
-#include "pointscale/candidate_plane.h"
+#include "pointscale/detail/candidate_plane.h"
 #include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
 #include "pointscale/spatial_order.h"
-#include "pointscale/thin_sheets.h"
+#include "pointscale/detail/thin_sheets.h"
 
 namespace pointscale {
 
 MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen::VectorXd& h,
                       const MlsOptions& options, const ProgressStage& stage) {
+  return mls_project(x, support, h, options, MlsHints{}, stage);
+}
+
+MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen::VectorXd& h,
+                      const MlsOptions& options, const MlsHints& hints, const ProgressStage& stage) {
   const Eigen::Index n = x.rows();
+  // An optional input of the wrong size is an error, not a reason to go without it.
+  const auto un = static_cast<std::size_t>(n);
+  if (options.order && options.order->size() != un)
+    throw std::invalid_argument("MlsOptions.order must list every point once");
+  if (options.near_support && options.near_support->size() != un)
+    throw std::invalid_argument("MlsOptions.near_support must have one entry per point");
+  if (!hints.point_sides != !hints.support_sides ||
+      (hints.point_sides && (hints.point_sides->rows() != n || hints.support_sides->rows() != support.size())))
+    throw std::invalid_argument("MlsHints: the sides of every point and every support point, or neither");
   const int k = std::min<int>(options.neighbors, support.size());
   const Points& s = support.points();
   const Eigen::VectorXd inv_h2 = h.array().square().inverse();
@@ -27,8 +43,7 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
     sheet_normals = &estimated;
   }
   const double sheet_extra = sheet_normals ? 1.0 / (options.sheet * options.sheet) - 1.0 : 0.0;
-  const bool sides = options.point_sides && options.support_sides && options.point_sides->rows() == n &&
-                     options.support_sides->rows() == support.size();
+  const bool sides = hints.point_sides != nullptr;
   MlsResult out;
   out.positions.resize(n, 3);
   out.normals.resize(n, 3);
@@ -40,19 +55,20 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
   // d_k(x) around x lies inside R). So one query serves the foot while it moves, and, points
   // coming in Morton order, the points after it, until that test fails. The neighbours are
   // always those of a fresh query. With a support point near each point (decompose passes each
-  // point's cluster), the query is centred there instead, and serves the points around it:
-  // at 1M points, 446k queries in the three projections of a decomposition, 1.13M in Morton
-  // order. Decompose also hands over the support's rows (support_neighbours.h), which answer
-  // the queries centred on support points without the tree.
-  const IndexList* near = options.near_support && options.near_support->size() == static_cast<std::size_t>(n)
-                              ? options.near_support : nullptr;
+  // point's cluster), the query is centred there instead, and serves the points around it,
+  // which takes fewer queries than the Morton order. Decompose also hands over the support's
+  // rows (support_neighbours.h, detail/mls_hints.h), which answer the queries centred on
+  // support points without the tree.
+  const IndexList* near = options.near_support;
   // Centred on a support point, a query must reach past the k nearest of every point around it.
   // With sides, about half the candidates face the other way: ask for twice as many.
   const int kc = std::min<int>(sides ? 2 * k + near_query_extra : near ? k + near_query_extra : k + 8, support.size());
-  const SupportNeighbours* rows = near && options.near_rows && options.near_rows->width == kc &&
-                                          options.near_rows->reach.size() == support.size()
-                                      ? options.near_rows : nullptr;
-  const bool given = options.order && options.order->size() == static_cast<std::size_t>(n);
+  // The caller's rows serve only when they are as wide as this projection's queries (with sides
+  // they are not: the tree answers).
+  const SupportNeighbours* rows = near && hints.near_rows && hints.near_rows->width == kc &&
+                                          hints.near_rows->reach.size() == support.size()
+                                      ? hints.near_rows : nullptr;
+  const bool given = options.order != nullptr;
   const IndexList own_order = given ? IndexList() : morton_order(x);
   const IndexList& order = given ? *options.order : own_order;
   const double everything = std::numeric_limits<double>::infinity();
@@ -92,11 +108,11 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
       gathered = true;
       int kept = 0;
       for (int j = 0; j < candidates; ++j)
-        kept += !sides || same_side(options.support_sides->row(cand[j]).dot(side));
+        kept += !sides || same_side(hints.support_sides->row(cand[j]).dot(side));
       set.resize(kept);
       for (int j = 0, jj = 0; jj < candidates; ++jj) {
         const Index c = cand[jj];
-        if (sides && !same_side(options.support_sides->row(c).dot(side))) continue;
+        if (sides && !same_side(hints.support_sides->row(c).dot(side))) continue;
         set.x[j] = s(c, 0) - origin.x(); set.y[j] = s(c, 1) - origin.y(); set.z[j] = s(c, 2) - origin.z();
         set.h[j] = h(c);
         set.inv_h2[j] = inv_h2(c);
@@ -112,7 +128,7 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
       const auto i = static_cast<std::size_t>(order[t]);
       const Vec3 p = x.row(static_cast<Eigen::Index>(i)).transpose();
       const Vec3 near_at = near ? Vec3(s.row((*near)[i]).transpose()) : p;
-      if (sides) side = options.point_sides->row(static_cast<Eigen::Index>(i)).transpose();
+      if (sides) side = hints.point_sides->row(static_cast<Eigen::Index>(i)).transpose();
       if (candidates == 0) near ? query_at_support((*near)[i]) : query(p);
       gather(p);
       // The foot and the plane are kept relative to p; the candidates are relative to origin.

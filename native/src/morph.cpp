@@ -2,10 +2,11 @@
 
 #include <algorithm>
 
-#include "pointscale/encoding.h"
 #include "pointscale/parallel.h"
-#include "pointscale/plane_fit.h"
+#include "pointscale/detail/plane_fit.h"
 #include "pointscale/sample_spacing.h"
+#include "pointscale/detail/base_normals.h"
+#include "pointscale/detail/project_from_afar.h"
 
 namespace pointscale {
 

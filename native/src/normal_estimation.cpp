@@ -2,9 +2,9 @@
 
 #include <algorithm>
 
-#include "pointscale/plane_fit.h"
+#include "pointscale/detail/plane_fit.h"
 #include "pointscale/self_knn.h"
-#include "pointscale/spanning_orientation.h"
+#include "pointscale/detail/spanning_orientation.h"
 
 namespace pointscale {
 

@@ -5,8 +5,8 @@
 
 #include "pointscale/normal_estimation.h"
 #include "pointscale/parallel.h"
-#include "pointscale/renumber_points.h"
-#include "pointscale/spanning_orientation.h"
+#include "pointscale/detail/renumber_points.h"
+#include "pointscale/detail/spanning_orientation.h"
 #include "pointscale/spatial_index.h"
 #include "pointscale/spatial_order.h"
 

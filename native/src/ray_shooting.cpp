@@ -4,10 +4,12 @@
 #include <limits>
 
 #include "pointscale/cluster_decimation.h"
-#include "pointscale/encoding.h"
 #include "pointscale/parallel.h"
-#include "pointscale/plane_fit.h"
+#include "pointscale/detail/plane_fit.h"
 #include "pointscale/sample_spacing.h"
+#include "pointscale/detail/build_level_support.h"
+#include "pointscale/detail/level_orientation.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 
@@ -161,16 +163,11 @@ MultiscaleModel decompose_rayshoot(const Points& points, const Points* input_nor
     Clustering clusters = cluster_decimate(level, target, options.max_variation);
     Points centre(n, 3);
     for (Eigen::Index i = 0; i < n; ++i) centre.row(i) = clusters.centroids.row(clusters.labels[i]);
+    LevelSupportRecipe recipe;
+    recipe.kernel = options.kernel;
     LevelSupport& support = model.support[l];
-    support.labels = std::move(clusters.labels);
-    support.clusters = static_cast<Index>(clusters.centroids.rows());
-    support.neighbors = std::min<int>(options.mls.neighbors, support.clusters);
-    choose_anchors(centre, level, support);
-    const Points anchors = support_centroids(level, support);
-    const SpatialIndex anchor_index(anchors);
-    support.h = options.kernel * local_spacing(anchor_index, 6);
-    support.neighborhoods = knn_graph(anchor_index, support.neighbors);
-    attach_frames(anchors, level, support);
+    support = build_level_support(std::move(clusters.labels), static_cast<Index>(clusters.centroids.rows()), centre,
+                                  level, options.mls.neighbors, recipe);
 
     if (l == 0) reference = input_normals ? *input_normals : orientation_reference(level, support);
     Points normals = level_normals(level, support, reference);

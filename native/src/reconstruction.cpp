@@ -3,6 +3,9 @@
 #include <utility>
 
 #include "pointscale/parallel.h"
+#include "pointscale/detail/level_normals.h"
+#include "pointscale/detail/transported_rotations.h"
+#include "pointscale/detail/reconstruct_levels.h"
 
 namespace pointscale {
 

@@ -4,17 +4,18 @@
 
 #include "pointscale/parallel.h"
 #include "pointscale/spatial_order.h"
+#include "pointscale/detail/cluster_layout.h"
+#include "pointscale/detail/reconstruct_levels.h"
 
 namespace pointscale {
 
 Reconstructor::Reconstructor(const MultiscaleModel& model) {
   const Eigen::Index n = model.base.rows();
   const int k = model.bands();
-  // Level 0's cluster order: clusters are numbered along the decimation's split tree, so it is
-  // a spatial order, and level 0's fits read and write consecutive rows.
+  // Level 0's layout (cluster_layout.h): a spatial order, so level 0's fits read and write
+  // consecutive rows.
   if (k > 0) {
-    order_ = group_by_label(model.support[0].labels.data(), static_cast<std::size_t>(n), model.support[0].clusters)
-                 .members;
+    order_ = cluster_layout(model.support[0].labels, model.support[0].clusters).members;
   } else {
     order_.resize(static_cast<std::size_t>(n));
     std::iota(order_.begin(), order_.end(), 0);
@@ -65,13 +66,13 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) {
     to.neighborhoods = from.neighborhoods;
     to.h = from.h;
     to.frames = from.frames;
-    to.local = from.local;  // rows in cluster order, which the renumbering below keeps
+    to.local = from.local;  // laid out by cluster_layout.h, which the renumbering below keeps
     to.labels.resize(from.labels.size());
     to.anchors.resize(from.anchors.size());
     for (std::size_t c = 0; c < from.anchors.size(); ++c) to.anchors[c] = rank[from.anchors[c]];
-    // The point order's grouping with its members renumbered: each cluster's members stay in
+    // The layout (cluster_layout.h) with its members renumbered: each cluster's members stay in
     // the order support.local and reconstruct() take them in, so every fit is the same.
-    LabelGroups groups = group_by_label(from.labels.data(), from.labels.size(), from.clusters);
+    LabelGroups groups = cluster_layout(from.labels, from.clusters);
     parallel_for(order_.size(), [&](std::size_t b, std::size_t e) {
       for (std::size_t r = b; r < e; ++r) {
         to.labels[r] = from.labels[order_[r]];

@@ -1,4 +1,4 @@
-#include "pointscale/release_memory.h"
+#include "pointscale/detail/release_memory.h"
 
 #include <cstdlib>  // defines __GLIBC__ on glibc
 

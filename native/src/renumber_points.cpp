@@ -1,4 +1,4 @@
-#include "pointscale/renumber_points.h"
+#include "pointscale/detail/renumber_points.h"
 
 #include <vector>
 

@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <vector>
 
-#include "pointscale/candidate_plane.h"
+#include "pointscale/detail/candidate_plane.h"
 #include "pointscale/parallel.h"
 #include "pointscale/sample_spacing.h"
 #include "pointscale/spatial_order.h"
-#include "pointscale/support_neighbours.h"
+#include "pointscale/detail/support_neighbours.h"
 
 namespace pointscale {
 

@@ -1,11 +1,11 @@
-#include "pointscale/spanning_orientation.h"
+#include "pointscale/detail/spanning_orientation.h"
 
 #include <utility>
 #include <vector>
 
-#include "pointscale/angle_sorted_edges.h"
+#include "pointscale/detail/angle_sorted_edges.h"
 #include "pointscale/parallel.h"
-#include "pointscale/signed_union_find.h"
+#include "pointscale/detail/signed_union_find.h"
 
 namespace pointscale {
 

@@ -1,12 +1,12 @@
-#include "pointscale/stencil_plane.h"
+#include "pointscale/detail/stencil_plane.h"
 
 #include <cmath>
 #include <limits>
 
-#include "pointscale/fast_exp.h"
-#include "pointscale/plane_fit.h"
-#include "pointscale/portable.h"
-#include "pointscale/simd_clones.h"
+#include "pointscale/detail/fast_exp.h"
+#include "pointscale/detail/plane_fit.h"
+#include "pointscale/detail/portable.h"
+#include "pointscale/detail/simd_clones.h"
 
 namespace pointscale {
 

@@ -1,4 +1,4 @@
-#include "pointscale/support_neighbours.h"
+#include "pointscale/detail/support_neighbours.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "pointscale/thin_sheets.h"
+#include "pointscale/detail/thin_sheets.h"
 
 #include <algorithm>
 

@@ -1,6 +1,6 @@
 // Folds: where a reconstruction turns the surface over itself (the paper's future work, Sec. 9).
 // Scaled-up detail, or a strong edit of the base, can push a point's offset past its
-// neighbours' (Max Planck's nose and ears become spikes at gains (2, 2, 1)). The base is the
+// neighbours' (a face's nose and ears become spikes when the finer bands are doubled). The base is the
 // parameter domain of the detail, so a fold is where the map from the base to the result
 // stops being one to one: seen on each point's ring (edit_rotations.h), the base's one-ring.
 #pragma once
@@ -64,8 +64,7 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input);
 // must not flip between them). Where the result is the base itself each edge gives
 // |b_j - b_i|^2 >= 0 and each plane its own square, so nothing folds. The input itself can
 // fold over its base (box walls standing on a concave foot; a scan's overhangs, nose and ears,
-// over a base smoothed over three levels: 2.4% of Max Planck's points, 4.7% of the dragon's),
-// and a reference built from it leaves those edges and planes out: what is counted is what a
+// over a base smoothed over three levels), and a reference built from it leaves those edges and planes out: what is counted is what a
 // filter or an edit adds, and an unedited reconstruction has no folds at all.
 //
 // model   its base (the parameter domain) and base_normals; the rings are the reference's

@@ -4,7 +4,6 @@
 #pragma once
 #include "pointscale/progress.h"
 #include "pointscale/spatial_index.h"
-#include "pointscale/support_neighbours.h"
 #include "pointscale/types.h"
 
 namespace pointscale {
@@ -21,24 +20,16 @@ struct MlsOptions {
   const Points* support_normals = nullptr;
   double sheet = 0.2;         // normal kernel width as a fraction of h, in (0, 1]
   bool thin_sheets = false;   // the same weights with normals estimated from 16 support neighbours
-  // Sides (decompose's thin sheets, thin_sheets.h): oriented normals of the points (#X by 3)
-  // and of the support points (#S by 3). A point's fit then takes only the support points that
-  // face its own way (same_side in thin_sheets.h), so the far side of a wall of any thickness never weighs in,
-  // while the near side is smoothed as it would be alone. Both or neither.
-  const Points* point_sides = nullptr;
-  const Points* support_sides = nullptr;
-  // The order in which the points are projected (spatial_order.h), or nullptr to compute a
+  // The order in which the points are projected (spatial_order.h; #X), or nullptr to compute a
   // Morton order; callers projecting the same points repeatedly compute it once.
   const IndexList* order = nullptr;
   // A support point near each point (#X, e.g. its decimation cluster's centroid), with the
   // points ordered by it: a point's first query is then centred there, asking for more
   // candidates, so that one query serves all the points around that support point.
   const IndexList* near_support = nullptr;
-  // With near_support, the support's rows from support_neighbours(support, neighbors +
-  // near_query_extra), made by the caller for other uses too: they stand in for the queries
-  // centred on support points (the same candidates in the same order).
-  const SupportNeighbours* near_rows = nullptr;
 };
+// (decompose also hands the projection its thin sheets' sides and its support's rows:
+// detail/mls_hints.h.)
 
 // Candidates beyond the k a fit takes that a query centred on a support point asks for.
 constexpr int near_query_extra = 16;
@@ -53,6 +44,8 @@ struct MlsResult {
 // x        #X by 3 points to project
 // support  spatial index on the #S support points that define the surface
 // h        #S kernel widths, one per support point (weights exp(-r^2/h_j^2))
+// Throws std::invalid_argument when options.order or options.near_support is given with a
+// size other than #X.
 MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen::VectorXd& h,
                       const MlsOptions& options, const ProgressStage& stage = {});
 

@@ -54,7 +54,7 @@ MultiscaleModel decompose_rayshoot(const Points& points, const Points* input_nor
                                    RayshootReport& report, const ProgressCallback* progress = nullptr);
 
 // The decimated support C^{l-1} of one level: centroids of `target` clusters of `fine`, diffused
-// when `diffusion` is given. Used by decompose_rayshoot and as decompose()'s smoother hook.
+// when `diffusion` is given (decompose_rayshoot's scale space).
 Points smoothed_support(const Points& fine, std::size_t target, double max_variation,
                         const DiffusionOptions* diffusion);
 

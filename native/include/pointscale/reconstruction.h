@@ -46,8 +46,8 @@ struct ReconstructionWorkspace {
 // base      #P by 3 edited P^0, or nullptr for the stored one (whose normals are then read from
 //           the model, bit for bit what fitting them again gives)
 // upto      reconstruct levels 0..upto only (upto <= k)
-// workspace storage kept between calls, or nullptr: arrays allocated afresh each call cost a
-//           page fault per 4 KB on first touch (1300 faults, 2-3 ms, at 100k points)
+// workspace storage kept between calls, or nullptr (arrays allocated afresh each call fault
+//           their pages in again on first touch)
 Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
                            bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr,
                            ReconstructionWorkspace* workspace = nullptr);
@@ -57,18 +57,6 @@ Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::
                                      bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr,
                                      ReconstructionWorkspace* workspace = nullptr);
 
-// What an edited reconstruction needs beyond the model (edit_rotations.h), found from the
-// model alone: each base point's ring and its plane, and each point's foot (from the model's
-// own unedited reconstruction). About 0.3 of a decomposition's time; kept in the workspace.
-EditSupport edit_support(const MultiscaleModel& model);
-
-// The level loop that both of the above and Reconstructor run, on p (P^0 in, the finest level
-// out). edited: p may differ from the stored base, so the levels of the stored base are built
-// beside it, and each level's normals, fitted there, are turned by the edit's rotation at each
-// point; kept: receives every level and its normals when not null; workspace: null, or what
-// the caller keeps between calls. Returns how the edit's turns were measured.
-EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p,
-                                               bool edited, Reconstruction* kept, int upto,
-                                               const ProgressCallback* progress, ReconstructionWorkspace* workspace);
+// The level loop behind both, shared with Reconstructor: detail/reconstruct_levels.h.
 
 }  // namespace pointscale

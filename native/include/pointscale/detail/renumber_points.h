@@ -1,6 +1,7 @@
-// decompose works on the points renumbered in the order of its first clusters, so that its
-// per-point passes read and write memory in order, whatever order the input comes in (a random
-// one, or a scanner's lines); the finished model is renumbered back to the input's numbering.
+// decompose works on the points renumbered in the layout of its first clusters (cluster_layout.h),
+// so that its per-point passes read and write memory in order, whatever order the input comes in
+// (a random one, or a scanner's lines); the finished model is renumbered back to the input's
+// numbering.
 #pragma once
 #include "pointscale/decomposition.h"
 #include "pointscale/spatial_order.h"
@@ -16,9 +17,8 @@ IndexList number_by_groups(Points& points, IndexList& labels, LabelGroups& group
 
 // Renumbers a model whose point i is input point original[i] (#P) to the input's numbering: the
 // per-point arrays and each level's labels and anchors. The frame coordinates (support.local)
-// stay as they are: the caller lays them out by cluster with each cluster's points in input
-// order (group_by_label visiting inverse_order(original)), which is their layout in the input's
-// numbering (level_support.h).
+// stay as they are: the caller lays them out by cluster_layout.h, which gives the same rows in
+// any numbering of the points.
 void renumber_model(MultiscaleModel& model, const IndexList& original);
 
 }  // namespace pointscale

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "pointscale/portable.h"
+#include "pointscale/detail/portable.h"
 #include "pointscale/types.h"
 
 namespace pointscale {
@@ -68,8 +68,8 @@ inline double max_abs6(const double* m) {
 // largest eigenvalues, and tr^2 - |A|^2 is about 2 d tr^2. That difference is only known to a
 // few ulp of tr^2, so the test asks for d below about 5e-9, which rounding cannot fake, and
 // one more squaring takes d below 2.5e-17, under the rounding of the result: at most one
-// squaring more than needed, where a test at the rounding level passed by chance (about half
-// the time per squaring) and took up to five more. The iterates are positive semi-definite after the first squaring, so their trace
+// squaring more than needed, where a test at the rounding level could pass only by chance and
+// take several more. The iterates are positive semi-definite after the first squaring, so their trace
 // bounds every entry: rescaling by the power of two nearest below 1 / trace keeps them in
 // range, exactly and without a division on the critical path.
 constexpr double rank_one_test = 1e-8;
@@ -98,10 +98,8 @@ inline Vec3 dominant_by_squaring(double* a) {
 // Unit eigenvector of the smallest eigenvalue of a symmetric positive semi-definite 3x3 matrix,
 // or a zero vector when two eigenvalues vanish (no plane). The adjugate has the same
 // eigenvectors with eigenvalues (l2 l3, l1 l3, l1 l2), so its dominant one is the normal; each
-// squaring squares the ratio l1 / l2. No trigonometry, and deterministic. (Newton's method on
-// det(c - s I) for a shift s just under l1, then the shifted adjugate, was as accurate and 20%
-// slower: each Newton step divides. A shift from a nearby normal saved nothing either: the MLS
-// fits of a decomposition converge in three squarings, 80% of them.)
+// squaring squares the ratio l1 / l2. No trigonometry, no division in the loop (Newton's method
+// on det(c - s I) would divide at each step), and deterministic.
 inline Vec3 smallest_eigenvector(const Mat3& c, double trace) {
   double a[6];
   detail::symmetric_adjugate(c, a);

@@ -4,7 +4,7 @@
 #pragma once
 #include <cstdint>
 
-#include "pointscale/portable.h"
+#include "pointscale/detail/portable.h"
 
 namespace pointscale {
 

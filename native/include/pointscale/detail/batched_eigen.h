@@ -6,8 +6,8 @@
 #include <cmath>
 #include <cstdint>
 
-#include "pointscale/plane_fit.h"
-#include "pointscale/portable.h"
+#include "pointscale/detail/plane_fit.h"
+#include "pointscale/detail/portable.h"
 
 namespace pointscale {
 

@@ -6,7 +6,7 @@
 #pragma once
 #include <vector>
 
-#include "pointscale/plane_fit.h"
+#include "pointscale/detail/plane_fit.h"
 #include "pointscale/types.h"
 
 namespace pointscale {

@@ -1,0 +1,55 @@
+#include "pointscale/detail/level_turns.h"
+
+#include <cmath>
+
+#include "pointscale/parallel.h"
+#include "pointscale/detail/level_normals.h"
+
+namespace pointscale {
+
+namespace {
+
+using FloatNormals = Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor>;
+
+// Per point, the sign of n_finer . n (-1, 0 or 1): the finer level's normals, held in single
+// precision, against the unoriented normals of the level below it. Single precision tells the
+// sign wherever the dot product is not near 0; there the finer level's normals are evaluated
+// again, exactly, for the clusters concerned (anchor_normals_of_clusters: bitwise as before).
+// finer_anchors #C by 3 and finer: the finer level's anchors and support.
+// original: the points' input numbers, by which finer.local lists each cluster's points.
+std::vector<signed char> turn_signs(const FloatNormals& finer_normals, const Points& finer_anchors,
+                                    const LevelSupport& finer, const Points& normals, const IndexList& original) {
+  const Eigen::Index n = normals.rows();
+  std::vector<signed char> turn(static_cast<std::size_t>(n));
+  std::vector<unsigned char> unsure(static_cast<std::size_t>(n), 0);
+  auto sign = [](double d) { return static_cast<signed char>((d > 0.0) - (d < 0.0)); };
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+    for (std::size_t ii = b; ii < e; ++ii) {
+      const auto i = static_cast<Eigen::Index>(ii);
+      const double d = finer_normals.row(i).cast<double>().dot(normals.row(i));
+      turn[ii] = sign(d);
+      unsure[ii] = std::abs(d) <= 1e-4;  // single precision is good to about 2e-7 here
+    }
+  }, {}, 4096);
+  std::vector<unsigned char> recompute(static_cast<std::size_t>(finer.clusters), 0);
+  bool any = false;
+  for (Eigen::Index i = 0; i < n; ++i) if (unsure[i]) { recompute[finer.labels[i]] = 1; any = true; }
+  if (!any) return turn;
+  IndexList which;
+  const Points exact = anchor_normals_of_clusters(finer_anchors, finer, recompute, which, &original);
+  for (std::size_t j = 0; j < which.size(); ++j)
+    if (unsure[which[j]]) turn[which[j]] = sign(exact.row(static_cast<Eigen::Index>(j)).dot(normals.row(which[j])));
+  return turn;
+}
+
+}  // namespace
+
+void LevelTurns::add(int l, const Points& level, Points normals, const std::vector<LevelSupport>& support,
+                     const IndexList& original) {
+  if (l < bands_) turns_[l] = turn_signs(finer_normals_, finer_anchors_, support[l], normals, original);
+  finer_anchors_ = support_centroids(level, support[l - 1]);
+  if (l == 1) normals0_ = std::move(normals);
+  else finer_normals_ = normals.cast<float>();
+}
+
+}  // namespace pointscale
