@@ -357,6 +357,20 @@ def _points_needed(levels: int, decimation: float, what: str) -> int:
     return int(np.ceil(MIN_COARSE_POINTS / fraction))
 
 
+def _scale_space_options(levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation):
+    """The checked settings of the scale space that decompose() and decompose_rayshoot() build alike."""
+    levels = positive(levels, "levels", integer=True, maximum=MAX_LEVELS)
+    if levels < 2:
+        raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
+    decimation = _decimation_option(decimation)
+    kernel = kernel_option(kernel)
+    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
+    tolerance = positive(tolerance, "tolerance")
+    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
+    max_variation = positive(max_variation, "max_variation")
+    return levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation
+
+
 def _require_round_trip(dec: "Decomposition", points: np.ndarray, why: str) -> None:
     """Refuses a decomposition that does not give its input back (a collapsed or inflated base)."""
     back = dec._reconstruct(np.ones(dec.n_bands), None)
@@ -438,15 +452,8 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     diffusion = None
     if smoother == "diffusion":
         diffusion = smoother_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
-    levels = positive(levels, "levels", integer=True, maximum=MAX_LEVELS)
-    if levels < 2:
-        raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
-    decimation = _decimation_option(decimation)
-    kernel = kernel_option(kernel)
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
-    tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
-    max_variation = positive(max_variation, "max_variation")
+    levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation = _scale_space_options(
+        levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation)
     need = _points_needed(levels, decimation, "decompose")
     p = as_points(points)
     if len(p) < need:
@@ -679,15 +686,8 @@ def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decima
     """
     if smoother not in ("mls", "diffusion"):
         raise ValueError(f"smoother must be 'mls' or 'diffusion', got {smoother!r}")
-    levels = positive(levels, "levels", integer=True, maximum=MAX_LEVELS)
-    if levels < 2:
-        raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
-    decimation = _decimation_option(decimation)
-    kernel = kernel_option(kernel)
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
-    tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
-    max_variation = positive(max_variation, "max_variation")
+    levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation = _scale_space_options(
+        levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation)
     diffusion = None
     if smoother == "diffusion":
         diffusion = smoother_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
