@@ -33,10 +33,9 @@ SMOOTHERS = {"MLS": "mls", "DIFFUSION": "diffusion"}
 ENCODINGS = {"PROJECTION": "projection", "RAY": "rayshoot"}
 
 
-def decompose_kwargs(ps, levels=4, decimation=0.25, kernel=1.0, neighbors=24, threads=0,
+def decompose_kwargs(levels=4, decimation=0.25, kernel=1.0, neighbors=24, threads=0,
                      smoother="MLS", encoding="PROJECTION") -> dict:
-    """Keyword arguments for :func:`decompose` from the panel's settings. ``ps`` is not used; it
-    stays for the callers that pass it (bench/blender_bench.py)."""
+    """Keyword arguments for :func:`decompose` from the panel's settings."""
     if smoother not in SMOOTHERS or encoding not in ENCODINGS:
         raise ValueError(f"unknown smoother {smoother!r} or encoding {encoding!r}")
     return dict(levels=int(levels), decimation=float(decimation), kernel=float(kernel),

@@ -167,7 +167,7 @@ def run(n: int, levels: int, repeat: int) -> None:
 
     # -- speed, interleaved
     engine, operator, finish = [], [], []
-    kwargs = decompose_op.compute.decompose_kwargs(ps, levels)
+    kwargs = decompose_op.compute.decompose_kwargs(levels)
     for _ in range(repeat):
         t = time.perf_counter()
         ps.decompose(p32.astype(np.float64), levels=levels)

@@ -54,7 +54,7 @@ def _prepare(op, context):
     ps = engine.get()
     try:
         kwargs = compute.decompose_kwargs(
-            ps, s.levels, s.decimation, s.kernel, s.neighbors, preferences.get(context).threads, s.smoother, s.encoding
+            s.levels, s.decimation, s.kernel, s.neighbors, preferences.get(context).threads, s.smoother, s.encoding
         )
         problem = compute.logic.check_points(points)
         if problem:
