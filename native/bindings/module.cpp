@@ -21,6 +21,7 @@
 #include "pointscale/reconstructor.h"
 #include "pointscale/sample_spacing.h"
 #include "pointscale/spatial_order.h"
+#include "pointscale/validation.h"
 #include "bindings.h"
 
 namespace py = pybind11;
@@ -71,44 +72,31 @@ py::dict model_arrays(const MultiscaleModel& m) {
   return d;
 }
 
-// Every array of a saved model is checked here before the core sees it, so that a damaged or
-// hand-made file raises ValueError (std::invalid_argument) instead of reading out of bounds or
-// giving NaN. The pointscale package checks the same and more first (multiscale.py).
-void require(bool ok, const std::string& what) {
-  if (!ok) throw std::invalid_argument("not a valid decomposition: " + what);
-}
-
-template <class Matrix>
-bool all_finite(const Matrix& m) {
-  return m.allFinite();
-}
-
+// A saved model's arrays as the core's model. Only their shapes are checked here, as they are
+// read; validate(model) (validation.h) then checks the values, so that a damaged or hand-made
+// file raises ValueError (std::invalid_argument) instead of reading out of bounds or giving NaN.
+// The pointscale package checks the file's arrays first, by their keys (multiscale.py).
 py::object item(const py::dict& d, const std::string& key) {
-  require(d.contains(key.c_str()), "missing array " + key);
+  if (!d.contains(key.c_str())) throw std::invalid_argument("not a valid decomposition: missing array " + key);
   return d[key.c_str()];
+}
+
+void require_shape(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument(what);
 }
 
 MultiscaleModel model_from_arrays(const py::dict& d) {
   MultiscaleModel m;
   m.base = to_points(item(d, "base").cast<DoubleArray>());
   const Eigen::Index n = m.base.rows();
-  require(n >= 1, "base has no points");
-  require(all_finite(m.base), "base holds NaN or infinite values");
   auto details = item(d, "details").cast<DoubleArray>();
-  if (details.ndim() != 2 || details.shape(1) != n) throw std::invalid_argument("details must be (k, n)");
-  require(details.shape(0) >= 1, "details has no bands (at least 1 is needed)");
-  require(details.shape(0) <= 1024, "details has more than 1024 bands");
+  require_shape(details.ndim() == 2 && details.shape(1) == n, "details must be (k, n)");
   const int k = static_cast<int>(details.shape(0));
-  m.details.resize(k, n);
-  for (int l = 0; l < k; ++l)
-    for (Eigen::Index i = 0; i < n; ++i) m.details(l, i) = details.at(l, i);
-  require(all_finite(m.details), "details holds NaN or infinite values");
+  m.details = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      details.data(), k, n);
   m.base_normals = to_points(item(d, "base_normals").cast<DoubleArray>());
-  require(m.base_normals.rows() == n, "base_normals must have the " + std::to_string(n) + " rows of base, got " +
-                                          std::to_string(m.base_normals.rows()));
-  require(all_finite(m.base_normals), "base_normals holds NaN or infinite values");
   auto labels = item(d, "labels").cast<IndexArray>();
-  if (labels.ndim() != 2 || labels.shape(0) != k || labels.shape(1) != n) throw std::invalid_argument("labels must be (k, n)");
+  require_shape(labels.ndim() == 2 && labels.shape(0) == k && labels.shape(1) == n, "labels must be (k, n)");
   m.support.resize(k);
   m.reports.resize(k);
   for (int l = 0; l < k; ++l) {
@@ -116,39 +104,31 @@ MultiscaleModel model_from_arrays(const py::dict& d) {
     LevelSupport& sup = m.support[l];
     auto nb = item(d, "neighborhoods_" + s).cast<IndexArray>();
     auto h = item(d, "kernel_" + s).cast<DoubleArray>();
-    if (nb.ndim() != 2 || h.ndim() != 1 || h.shape(0) != nb.shape(0)) throw std::invalid_argument("inconsistent support arrays at level " + s);
-    require(nb.shape(0) >= 1 && nb.shape(1) >= 1, "level " + s + " has no clusters or no neighbours");
+    require_shape(nb.ndim() == 2 && h.ndim() == 1 && h.shape(0) == nb.shape(0), "inconsistent support arrays at level " + s);
     sup.clusters = static_cast<Index>(nb.shape(0));
     sup.neighbors = static_cast<int>(nb.shape(1));
     sup.neighborhoods.assign(nb.data(), nb.data() + nb.size());
     sup.labels.assign(labels.data(l, 0), labels.data(l, 0) + n);
     sup.h = Eigen::Map<const Eigen::VectorXd>(h.data(), h.shape(0));
-    require(all_finite(sup.h) && (sup.h.array() > 0.0).all(), "kernel widths must be finite and > 0 at level " + s);
     auto an = item(d, "anchors_" + s).cast<IndexArray>();
-    if (an.ndim() != 1 || an.shape(0) != sup.clusters) throw std::invalid_argument("anchors must be (clusters,) at level " + s);
+    require_shape(an.ndim() == 1 && an.shape(0) == sup.clusters, "anchors must be (clusters,) at level " + s);
     sup.anchors.assign(an.data(), an.data() + an.size());
-    for (Index v : sup.anchors) if (v < 0 || v >= n) throw std::invalid_argument("anchor out of range at level " + s);
     auto fr = item(d, "frames_" + s).cast<IndexArray>();
-    if (fr.ndim() != 2 || fr.shape(0) != sup.clusters || fr.shape(1) != 2) throw std::invalid_argument("frames must be (clusters, 2) at level " + s);
+    require_shape(fr.ndim() == 2 && fr.shape(0) == sup.clusters && fr.shape(1) == 2, "frames must be (clusters, 2) at level " + s);
     sup.frames.assign(fr.data(), fr.data() + fr.size());
-    for (Index v : sup.frames) if (v < 0 || v >= sup.clusters) throw std::invalid_argument("frame out of range at level " + s);
-    for (Index v : sup.labels) if (v < 0 || v >= sup.clusters) throw std::invalid_argument("label out of range at level " + s);
-    for (Index v : sup.neighborhoods) if (v < 0 || v >= sup.clusters) throw std::invalid_argument("neighbourhood out of range at level " + s);
-    // Each cluster's anchor is one of its members, so no cluster is empty.
-    for (Index c = 0; c < sup.clusters; ++c)
-      require(sup.labels[static_cast<std::size_t>(sup.anchors[static_cast<std::size_t>(c)])] == c,
-              "the anchor of cluster " + std::to_string(c) + " is not in that cluster at level " + s);
-    // Saved in point order; the core keeps them in cluster order (level_support.h).
-    const Points local = to_points(item(d, "local_" + s).cast<DoubleArray>());
-    if (local.rows() != n) throw std::invalid_argument("local coordinates must be (n, 3) at level " + s);
-    require(all_finite(local), "local coordinates hold NaN or infinite values at level " + s);
-    local_from_points(local, sup);
+    sup.local = to_points(item(d, "local_" + s).cast<DoubleArray>());  // in point order until checked
   }
   if (d.contains("parts")) {
     auto parts = d["parts"].cast<IndexArray>();
-    if (parts.ndim() != 1 || parts.shape(0) != n) throw std::invalid_argument("parts must be (n,)");
+    require_shape(parts.ndim() == 1 && parts.shape(0) == n, "parts must be (n,)");
     m.parts.assign(parts.data(), parts.data() + n);
-    for (Index v : m.parts) if (v < 0 || v >= n) throw std::invalid_argument("part label out of range");
+  }
+  validate(m);
+  // Saved in point order; the core keeps them in cluster order (level_support.h), which the
+  // labels, now checked, give.
+  for (LevelSupport& sup : m.support) {
+    const Points by_point = std::move(sup.local);
+    local_from_points(by_point, sup);
   }
   return m;
 }
@@ -172,9 +152,10 @@ struct ReconstructionBuffers {
 
 void bind_options(py::module_& m);    // options.cpp
 void bind_operators(py::module_& m);  // operators.cpp
+void bind_validation(py::module_& m);  // validation.cpp
 
 PYBIND11_MODULE(_core, m) {
-  m.doc() = "Pointscale native core. Use the pointscale package, which checks inputs, instead of this module.";
+  m.doc() = "Pointscale native core. Use the pointscale package instead of this module.";
   py::register_exception<Cancelled>(m, "Cancelled");
   bind_options(m);  // first: the functions below take these classes
 
@@ -199,15 +180,11 @@ PYBIND11_MODULE(_core, m) {
       // and the points go out in them (one pass each way fewer than doing it in NumPy).
       .def("reconstruct", [](const MultiscaleModel& s, const DoubleArray& gains, py::object base, bool keep_levels,
                              int upto, py::object progress, py::object origin, py::object buffers, int threads) {
-        const Eigen::MatrixXd g = to_gains(gains);
-        const Eigen::Index n = s.base.rows();
-        if (s.bands() < 1) throw std::invalid_argument("the model has no bands");
-        if (g.rows() != s.bands() || (g.cols() != 1 && g.cols() != n)) throw std::invalid_argument("gains must be (k,) or (k, n)");
+        const Eigen::MatrixXd g = to_gains(gains);  // checked by the core (validation.h)
         Points edited;
         const bool has_base = !base.is_none();
         const Vec3 o = to_origin(origin);
         if (has_base) edited = to_points_centred(base.cast<DoubleArray>(), o);
-        if (has_base && edited.rows() != n) throw std::invalid_argument("base must be (n, 3)");
         PythonProgress p(progress);
         ReconstructionBuffers* kept = buffers.is_none() ? nullptr : buffers.cast<ReconstructionBuffers*>();
         Reconstruction r = without_gil(threads, [&] {
@@ -237,24 +214,23 @@ PYBIND11_MODULE(_core, m) {
                                     "Storage that Model.reconstruct reuses from call to call (two (n, 3) arrays).")
       .def(py::init<>());
 
-  // The solver for repeated reconstructions (reconstructor.h); the pointscale package checks
-  // the arguments, these checks only keep a wrong call from reading out of bounds.
+  // The solver for repeated reconstructions (reconstructor.h), which checks its arguments.
   py::class_<Reconstructor>(m, "Reconstructor")
       .def(py::init([](const MultiscaleModel& model, int threads) {
-        if (model.bands() < 1) throw std::invalid_argument("the model has no bands");
         return without_gil(threads, [&] { return std::make_unique<Reconstructor>(model); });
       }), py::arg("model"), py::arg("threads") = 0)
       .def("reconstruct", [](Reconstructor& r, const DoubleArray& gains, py::object base, py::object progress,
                              py::object origin, int threads) {
         const Eigen::Index n = r.points();
         const Eigen::MatrixXd g = to_gains(gains);
-        if (g.rows() != r.bands() || (g.cols() != 1 && g.cols() != n)) throw std::invalid_argument("gains must be (k,) or (k, n)");
+        const Vec3 o = to_origin(origin);
         DoubleArray b;
         if (!base.is_none()) {
           b = base.cast<DoubleArray>();
-          if (b.ndim() != 2 || b.shape(0) != n || b.shape(1) != 3) throw std::invalid_argument("base must be (n, 3)");
+          if (b.ndim() != 2 || b.shape(1) != 3) throw std::invalid_argument("base must be an (n, 3) array");
+          // The core takes the rows by pointer, so it cannot see their count: checked here.
+          check_base(Eigen::Map<const Points>(b.data(), b.shape(0), 3), n, o);
         }
-        const Vec3 o = to_origin(origin);
         const double* base_rows = base.is_none() ? nullptr : b.data();
         PythonProgress p(progress);
         return without_gil(threads, [&] { return r.reconstruct(g, base_rows, o, p.get()); });
@@ -363,9 +339,11 @@ PYBIND11_MODULE(_core, m) {
                       py::object progress, py::object near, int threads) {
     Points x = to_points(points), s = to_points(onto);
     IndexList near_support, order;
-    if (!near.is_none()) {  // checked by the Python layer: (n,) in [0, #onto)
+    check_kernel(kernel);
+    if (!near.is_none()) {
       const auto a = near.cast<IndexArray>();
       near_support.assign(a.data(), a.data() + a.size());
+      check_near_support(near_support, x.rows(), s.rows());  // before group_by_label reads it
       order = group_by_label(near_support.data(), near_support.size(), static_cast<Index>(s.rows())).members;
       options.near_support = &near_support;
       options.order = &order;
@@ -403,6 +381,7 @@ PYBIND11_MODULE(_core, m) {
 
   m.def("estimate_normals", [](const DoubleArray& points, int neighbors, bool orient, int threads) {
     Points p = to_points(points);
+    if (!orient) check_normal_estimation(p, neighbors);  // oriented_normals checks its own
     return without_gil(threads, [&] {
       if (orient) return oriented_normals(std::move(p), neighbors, orientation_width);
       return pca_normals(SpatialIndex(std::move(p)), neighbors);
@@ -410,4 +389,5 @@ PYBIND11_MODULE(_core, m) {
   }, py::arg("points"), py::arg("neighbors"), py::arg("orient"), py::arg("threads") = 0);
 
   bind_operators(m);
+  bind_validation(m);
 }

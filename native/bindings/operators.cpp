@@ -11,6 +11,7 @@
 #include "pointscale/morph.h"
 #include "pointscale/ray_shooting.h"
 #include "pointscale/sample_spacing.h"
+#include "pointscale/validation.h"
 #include "bindings.h"
 
 namespace py = pybind11;
@@ -30,6 +31,7 @@ void bind_operators(py::module_& m) {
   m.def("project_sheets", [](const DoubleArray& points, const DoubleArray& onto, py::object onto_normals,
                              double kernel, MlsOptions options, double sheet, py::object progress, int threads) {
     const Points x = to_points(points), s = to_points(onto);
+    check_kernel(kernel);
     const OptionalPoints given(onto_normals);
     options.sheet = sheet;
     if (given.present) options.support_normals = &given.p;
@@ -47,6 +49,7 @@ void bind_operators(py::module_& m) {
   m.def("shoot_rays", [](const DoubleArray& origins, const DoubleArray& directions, const DoubleArray& onto,
                          double kernel, const RayOptions& options, int threads) {
     const Points o = to_points(origins), d = to_points(directions), s = to_points(onto);
+    check_kernel(kernel);
     RayHits r = without_gil(threads, [&] {
       const SpatialIndex index(s);
       return shoot_rays(o, d, index, kernel * local_spacing(index, 6), options);

@@ -4,12 +4,15 @@
 // stay with the binding that owns what they point to.
 #include <pybind11/pybind11.h>
 
+#include <string>
+
 #include "pointscale/decomposition.h"
 #include "pointscale/diffusion.h"
 #include "pointscale/encoding.h"
 #include "pointscale/mls_projection.h"
 #include "pointscale/morph.h"
 #include "pointscale/ray_shooting.h"
+#include "pointscale/validation.h"
 
 namespace py = pybind11;
 using namespace pointscale;
@@ -28,7 +31,8 @@ void bind_options(py::module_& m) {
            py::arg("max_iterations") = mls.max_iterations)
       .def_readwrite("neighbors", &MlsOptions::neighbors)
       .def_readwrite("tolerance", &MlsOptions::tolerance)
-      .def_readwrite("max_iterations", &MlsOptions::max_iterations);
+      .def_readwrite("max_iterations", &MlsOptions::max_iterations)
+      .def("validate", [](const MlsOptions& o) { validate(o); }, "Raises ValueError if a setting is out of range.");
 
   // `lambda` is a Python keyword, so the step is `lam` here, as in pointscale.smooth_diffusion.
   const DiffusionOptions dif;
@@ -46,7 +50,10 @@ void bind_options(py::module_& m) {
       .def_readwrite("neighbors", &DiffusionOptions::neighbors)
       .def_readwrite("lam", &DiffusionOptions::lambda)
       .def_readwrite("mu", &DiffusionOptions::mu)
-      .def_readwrite("iterations", &DiffusionOptions::iterations);
+      .def_readwrite("iterations", &DiffusionOptions::iterations)
+      .def("validate", [](const DiffusionOptions& o, const std::string& prefix) { validate(o, prefix.c_str()); },
+           py::arg("prefix") = "", "Raises ValueError if a setting is out of range; prefix starts the names of "
+           "neighbors and iterations in the message (decompose's \"diffusion_\").");
 
   // The diffusion smoother goes to decompose as its own argument: the struct holds a pointer.
   const DecomposeOptions dec;
@@ -70,7 +77,8 @@ void bind_options(py::module_& m) {
       .def_readwrite("kernel", &DecomposeOptions::kernel)
       .def_readwrite("max_variation", &DecomposeOptions::max_variation)
       .def_readwrite("mls", &DecomposeOptions::mls)
-      .def_readwrite("thin_sheets", &DecomposeOptions::thin_sheets);
+      .def_readwrite("thin_sheets", &DecomposeOptions::thin_sheets)
+      .def("validate", [](const DecomposeOptions& o) { validate(o); }, "Raises ValueError if a setting is out of range.");
 
   const EncodeOptions enc;
   py::class_<EncodeOptions>(m, "EncodeOptions", "encode's settings (encoding.h).")
@@ -85,7 +93,8 @@ void bind_options(py::module_& m) {
            py::arg("max_variation") = enc.max_variation)
       .def_readwrite("kernel", &EncodeOptions::kernel)
       .def_readwrite("mls", &EncodeOptions::mls)
-      .def_readwrite("max_variation", &EncodeOptions::max_variation);
+      .def_readwrite("max_variation", &EncodeOptions::max_variation)
+      .def("validate", [](const EncodeOptions& o) { validate(o); }, "Raises ValueError if a setting is out of range.");
 
   const MorphOptions mor;
   py::class_<MorphOptions>(m, "MorphOptions", "morph's settings (morph.h).")
@@ -100,7 +109,8 @@ void bind_options(py::module_& m) {
            py::arg("interpolation_neighbors") = mor.interpolation_neighbors)
       .def_readwrite("kernel", &MorphOptions::kernel)
       .def_readwrite("mls", &MorphOptions::mls)
-      .def_readwrite("interpolation_neighbors", &MorphOptions::interpolation_neighbors);
+      .def_readwrite("interpolation_neighbors", &MorphOptions::interpolation_neighbors)
+      .def("validate", [](const MorphOptions& o) { validate(o); }, "Raises ValueError if a setting is out of range.");
 
   const RayOptions ray;
   py::class_<RayOptions>(m, "RayOptions", "Ray shooting's settings (ray_shooting.h).")
@@ -120,5 +130,6 @@ void bind_options(py::module_& m) {
       .def_readwrite("tolerance", &RayOptions::tolerance)
       .def_readwrite("max_iterations", &RayOptions::max_iterations)
       .def_readwrite("max_distance", &RayOptions::max_distance)
-      .def_readwrite("min_cosine", &RayOptions::min_cosine);
+      .def_readwrite("min_cosine", &RayOptions::min_cosine)
+      .def("validate", [](const RayOptions& o) { validate(o); }, "Raises ValueError if a setting is out of range.");
 }

@@ -1,4 +1,5 @@
 #include "pointscale/decomposition.h"
+#include "pointscale/validation.h"
 
 #include <algorithm>
 #include <cmath>
@@ -155,6 +156,7 @@ void orient_levels(MultiscaleModel& model, LevelTurns& turns, const Points* inpu
 
 MultiscaleModel decompose(Points points, const Points* input_normals, const DecomposeOptions& options,
                           const ProgressCallback* progress) {
+  check_decompose_input(points, input_normals, options);
   const Eigen::Index n = points.rows();
   const int k = options.levels - 1;
   const double scale = (points.colwise().maxCoeff() - points.colwise().minCoeff()).norm();

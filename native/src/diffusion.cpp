@@ -1,4 +1,5 @@
 #include "pointscale/diffusion.h"
+#include "pointscale/validation.h"
 
 #include <algorithm>
 
@@ -46,6 +47,9 @@ Points diffuse(const Points& points, const IndexList& neighborhoods, int k, cons
 }
 
 Points diffuse(const Points& points, const DiffusionOptions& options, const ProgressStage& stage) {
+  validate(options);
+  check_points(points);
+  check_extent(points, "points", false);
   const SpatialIndex index(points);
   const int k = std::min<int>(options.neighbors, index.size());
   const IndexList nb = knn_graph(index, k, stage.sub(0.0, 0.2));

@@ -1,4 +1,5 @@
 #include "pointscale/encoding.h"
+#include "pointscale/validation.h"
 
 #include <algorithm>
 #include <utility>
@@ -15,6 +16,12 @@ namespace pointscale {
 
 MultiscaleModel encode_onto(const Points& points, const Points& base, const Points* base_normals,
                             const EncodeOptions& options, const ProgressCallback* progress) {
+  validate(options);
+  check_points(points, "points", min_coarse_points);
+  check_points(base, "base_points", min_coarse_points);
+  check_surface(base, "base_points", true);
+  check_near(points, bounding_box_centre(base), "points", "base_points");
+  check_normals(base_normals, base, "base_normals", "base_points");
   const ProgressStage all{progress, 0.0, 1.0};
   const Eigen::Index n = points.rows();
   const double scale = (points.colwise().maxCoeff() - points.colwise().minCoeff()).norm();

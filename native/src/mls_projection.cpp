@@ -12,6 +12,7 @@
 #include "pointscale/parallel.h"
 #include "pointscale/spatial_order.h"
 #include "pointscale/detail/thin_sheets.h"
+#include "pointscale/validation.h"
 
 namespace pointscale {
 
@@ -23,12 +24,17 @@ MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen:
 MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen::VectorXd& h,
                       const MlsOptions& options, const MlsHints& hints, const ProgressStage& stage) {
   const Eigen::Index n = x.rows();
+  validate(options);
+  check_points(x, "points");
+  if (h.size() != support.size()) throw std::invalid_argument("h must hold one kernel width per support point");
   // An optional input of the wrong size is an error, not a reason to go without it.
   const auto un = static_cast<std::size_t>(n);
   if (options.order && options.order->size() != un)
     throw std::invalid_argument("MlsOptions.order must list every point once");
   if (options.near_support && options.near_support->size() != un)
     throw std::invalid_argument("MlsOptions.near_support must have one entry per point");
+  if (options.near_support) check_near_support(*options.near_support, n, support.size());
+  check_normals(options.support_normals, support.points(), "onto_normals", "onto");
   if (!hints.point_sides != !hints.support_sides ||
       (hints.point_sides && (hints.point_sides->rows() != n || hints.support_sides->rows() != support.size())))
     throw std::invalid_argument("MlsHints: the sides of every point and every support point, or neither");

@@ -1,4 +1,5 @@
 #include "pointscale/morph.h"
+#include "pointscale/validation.h"
 
 #include <algorithm>
 
@@ -67,6 +68,15 @@ Projection project_onto_base(const Points& x, const SpatialIndex& base, const Ei
 
 MorphModel morph(const Points& a, const Points& b, const Points& base, const Points* base_normals,
                  const MorphOptions& options, const ProgressCallback* progress) {
+  validate(options);
+  check_points(a, "points_a");
+  check_points(b, "points_b");
+  check_points(base, "base_points", min_coarse_points);
+  check_surface(base, "base_points", true);
+  const Vec3 centre = bounding_box_centre(base);
+  check_near(a, centre, "points_a", "base_points");
+  check_near(b, centre, "points_b", "base_points");
+  check_normals(base_normals, base, "base_normals", "base_points");
   const ProgressStage all{progress, 0.0, 1.0};
   const SpatialIndex base_index(base);
   const Eigen::VectorXd h = options.kernel * local_spacing(base_index, 6);

@@ -1,5 +1,9 @@
 #include "pointscale/oriented_normals.h"
 
+#include <stdexcept>
+
+#include "pointscale/validation.h"
+
 #include <memory>
 #include <utility>
 
@@ -13,6 +17,8 @@
 namespace pointscale {
 
 Points oriented_normals(Points&& points, int k, int width) {
+  check_normal_estimation(points, k);
+  if (width < 1 || width > k) throw std::invalid_argument("width must be in [1, k]");
   const Index n = static_cast<Index>(points.rows());
   const IndexList order = morton_order(points);
   std::unique_ptr<SpatialIndex> index;

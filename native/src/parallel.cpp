@@ -1,4 +1,5 @@
 #include "pointscale/parallel.h"
+#include "pointscale/validation.h"
 
 #include <algorithm>
 #include <atomic>
@@ -18,7 +19,7 @@ thread_local int scoped_threads = 0;
 }  // namespace
 
 ThreadCountScope::ThreadCountScope(int threads) : previous_(scoped_threads) {
-  if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0: all cores), got " + std::to_string(threads));
+  check_threads(threads);
   scoped_threads = threads;
 }
 

@@ -1,5 +1,10 @@
 #include "pointscale/ray_shooting.h"
 
+#include <stdexcept>
+#include <string>
+
+#include "pointscale/validation.h"
+
 #include <cmath>
 #include <limits>
 
@@ -15,6 +20,16 @@ namespace pointscale {
 
 RayHits shoot_rays(const Points& origins, const Points& directions, const SpatialIndex& support,
                    const Eigen::VectorXd& h, const RayOptions& options, const ProgressStage& stage) {
+  validate(options);
+  check_points(origins, "origins");
+  if (directions.rows() != origins.rows())
+    throw std::invalid_argument("directions must have the shape of origins (" + std::to_string(origins.rows()) +
+                                ", 3), got (" + std::to_string(directions.rows()) + ", 3)");
+  check_points(directions, "directions");
+  if (((directions.rowwise().norm().array() - 1.0).abs() >= 1e-6).any())
+    throw std::invalid_argument("directions must be unit vectors");
+  if (h.size() != support.size()) throw std::invalid_argument("h must hold one kernel width per support point");
+  check_near(origins, bounding_box_centre(support.points()), "origins", "onto");
   const Eigen::Index n = origins.rows();
   const int k = std::min<int>(options.neighbors, support.size());
   const Points& s = support.points();
@@ -127,6 +142,10 @@ Points smoothed_support(const Points& fine, std::size_t target, double max_varia
 MultiscaleModel decompose_rayshoot(const Points& points, const Points* input_normals, const DecomposeOptions& options,
                                    const DiffusionOptions* diffusion, const RayOptions& rays, double fine_kernel,
                                    RayshootReport& report, const ProgressCallback* progress) {
+  if (diffusion) validate(*diffusion, "diffusion_");
+  check_decompose_input(points, input_normals, options, "decompose_rayshoot");
+  validate(rays);
+  check_kernel(fine_kernel, "fine_kernel");
   const Eigen::Index n = points.rows();
   const int k = options.levels - 1;
   const ProgressStage all{progress, 0.0, 1.0};

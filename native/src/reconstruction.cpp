@@ -1,4 +1,5 @@
 #include "pointscale/reconstruction.h"
+#include "pointscale/validation.h"
 
 #include <utility>
 
@@ -114,6 +115,7 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
 Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
                            bool keep_levels, int upto, const ProgressCallback* progress,
                            ReconstructionWorkspace* workspace) {
+  check_gains(gains, model.bands(), model.base.rows());
   if (base) return reconstruct_from_base(model, gains, *base, keep_levels, upto, progress, workspace);
   return reconstruct_levels(model, gains, model.base, false, keep_levels, upto, progress, workspace);
 }
@@ -121,6 +123,8 @@ Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& 
 Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points base,
                                      bool keep_levels, int upto, const ProgressCallback* progress,
                                      ReconstructionWorkspace* workspace) {
+  check_gains(gains, model.bands(), model.base.rows());
+  check_base(base, model.base.rows(), Vec3::Zero());
   return reconstruct_levels(model, gains, std::move(base), true, keep_levels, upto, progress, workspace);
 }
 

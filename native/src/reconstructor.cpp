@@ -6,10 +6,12 @@
 #include "pointscale/spatial_order.h"
 #include "pointscale/detail/cluster_layout.h"
 #include "pointscale/detail/reconstruct_levels.h"
+#include "pointscale/validation.h"
 
 namespace pointscale {
 
 Reconstructor::Reconstructor(const MultiscaleModel& model) {
+  validate(model);
   const Eigen::Index n = model.base.rows();
   const int k = model.bands();
   // Level 0's layout (cluster_layout.h): a spatial order, so level 0's fits read and write
@@ -85,6 +87,8 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) {
 
 Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* base, const Vec3& origin,
                                   const ProgressCallback* progress) {
+  check_gains(gains, bands(), points());
+  if (base) check_base(Eigen::Map<const Points>(base, points(), 3), points(), origin);
   const std::lock_guard<std::mutex> lock(busy_);
   const Eigen::Index n = points();
   const bool edited = base != nullptr;

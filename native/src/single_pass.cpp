@@ -1,4 +1,5 @@
 #include "pointscale/single_pass.h"
+#include "pointscale/validation.h"
 
 #include <algorithm>
 #include <vector>
@@ -74,6 +75,9 @@ struct Fitter {
 
 SinglePassResult mls_single_pass(const Points& x, bool self, const SpatialIndex& support, double kernel, int k,
                                  bool estimate, const ProgressStage& stage) {
+  check_kernel(kernel);
+  check_neighbors(k);
+  check_points(x, "points");
   const Eigen::Index n = x.rows();
   self = self && n == support.size();
   k = std::min<int>(k, support.size());
