@@ -7,9 +7,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _core
-from ._checks import (MAX_GAIN, MAX_ITERATIONS, MAX_NEIGHBORS, as_callback, as_normals_of, as_points, centre,
-                      finite_result, kernel_option, positive, require_near, require_surface, thread_option)
-from .multiscale import MIN_COARSE_POINTS
+from ._checks import (MAX_GAIN, MIN_COARSE_POINTS, as_array, as_callback, as_points, centre, finite_result,
+                      mls_options, number, thread_option)
 
 #: Below this overlap of A's and B's bounding boxes (intersection over union) morph warns:
 #: the base lies far from one of them, and beta = 1 would land away from B.
@@ -107,20 +106,15 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_sam
 
 def _morph_where_they_lie(a, b, base_points, *, base_normals, kernel, neighbors, interpolation_neighbors,
                           tolerance, max_iterations, threads, progress) -> Morph:
+    # The raw coordinates here; the core checks the rest (settings, the base's surface, the
+    # models' reach, the normals) on the centred points.
     s = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)
-    require_surface(s, "base_points", allow_planar=True)
-    require_near(a, centre(s), "points_a", "base_points")
-    require_near(b, centre(s), "points_b", "base_points")
-    kernel = kernel_option(kernel)
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
-    k = positive(interpolation_neighbors, "interpolation_neighbors", integer=True, maximum=MAX_NEIGHBORS)
-    tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
-    bn = as_normals_of(base_normals, s, "base_normals", "base_points")
+    bn = None if base_normals is None else as_array(base_normals, "base_normals")
     origin = centre(np.vstack([a, b, s]))
+    mls = mls_options(neighbors, tolerance, max_iterations)
     options = _core.MorphOptions(
-        kernel=kernel, interpolation_neighbors=k,
-        mls=_core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations))
+        kernel=number(kernel, "kernel"), mls=mls,
+        interpolation_neighbors=number(interpolation_neighbors, "interpolation_neighbors", integer=True))
     r = _core.morph(a - origin, b - origin, s - origin, base_normals=bn, options=options,
                     progress=as_callback(progress), threads=thread_option(threads))
     for key in ("base", "normals", "detail_a", "detail_b"):

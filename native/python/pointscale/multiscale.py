@@ -10,13 +10,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _core
-from ._checks import (MAX_COORDINATE, MAX_EXTENT, MAX_GAIN, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS,
-                      as_callback, as_normals_of, as_points, centre, finite_result, kernel_option, positive,
-                      require_extent, require_near, require_surface, thread_option)
+from ._checks import (MAX_COORDINATE, MAX_EXTENT, MAX_LEVELS, MAX_NEIGHBORS, MIN_COARSE_POINTS, as_array,
+                      as_callback, as_normals_of, as_points, centre, finite_result, mls_options, number, positive,
+                      require_extent, require_near, thread_option)
 from ._diffusion import settings_record, smoother_options
 
-#: The coarsest level keeps gamma**(levels-1) * n points; fewer than this cannot carry a surface.
-MIN_COARSE_POINTS = 8
+# MIN_COARSE_POINTS (from the core's limits): the coarsest level keeps gamma**(levels-1) * n
+# points; fewer than this cannot carry a surface.
 # Below this many support points a closed base has too few clusters to keep its shape: the
 # kernels then span a large part of it, and an edit of the base reaches far across it.
 FEW_COARSE_POINTS = 100
@@ -330,8 +330,8 @@ def coarse_base_warning(n: int, levels: int = 4, decimation: float = 0.25) -> st
     """The warning `decompose` gives when level 0 would keep too few support points, or None.
     Callers that run decompose on a worker thread can show it without catching warnings."""
     n = positive(n, "n", integer=True)
-    levels = positive(levels, "levels", integer=True, minimum=2, maximum=MAX_LEVELS)
-    decimation = _decimation_option(decimation)
+    levels, decimation = number(levels, "levels", integer=True), number(decimation, "decimation")
+    _core.DecomposeOptions(levels=levels, decimation=decimation).validate()
     coarse = int(np.floor(decimation ** (levels - 1) * n))
     if coarse >= FEW_COARSE_POINTS:
         return None
@@ -340,35 +340,22 @@ def coarse_base_warning(n: int, levels: int = 4, decimation: float = 0.25) -> st
             f"(at least {FEW_COARSE_POINTS} is safe).")
 
 
-def _decimation_option(decimation) -> float:
-    decimation = positive(decimation, "decimation")
-    if decimation >= 1.0:
-        raise ValueError(f"decimation must be in (0, 1), got {decimation}")
-    return decimation
+def _scale_space(levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation,
+                 thin_sheets: bool = False) -> _core.DecomposeOptions:
+    """The core's settings of the scale space that decompose() and decompose_rayshoot() build
+    alike, the numbers converted; the core checks their ranges."""
+    mls = mls_options(neighbors, tolerance, max_iterations)
+    return _core.DecomposeOptions(levels=number(levels, "levels", integer=True),
+                                  decimation=number(decimation, "decimation"), kernel=number(kernel, "kernel"),
+                                  max_variation=number(max_variation, "max_variation"), mls=mls,
+                                  thin_sheets=thin_sheets)
 
 
-def _points_needed(levels: int, decimation: float, what: str) -> int:
-    """The fewest input points that leave MIN_COARSE_POINTS at the coarsest level."""
-    fraction = decimation ** (levels - 1)
-    if fraction * 2.0 ** 31 < MIN_COARSE_POINTS:
-        raise ValueError(f"{what} with levels={levels} and decimation={decimation} would need more than 2^31 "
-                         f"points (the coarsest level keeps decimation**(levels-1) of them and needs "
-                         f"{MIN_COARSE_POINTS}); use fewer levels or a larger decimation")
-    return int(np.ceil(MIN_COARSE_POINTS / fraction))
-
-
-def _scale_space_options(levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation):
-    """The checked settings of the scale space that decompose() and decompose_rayshoot() build alike."""
-    levels = positive(levels, "levels", integer=True, maximum=MAX_LEVELS)
-    if levels < 2:
-        raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
-    decimation = _decimation_option(decimation)
-    kernel = kernel_option(kernel)
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
-    tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
-    max_variation = positive(max_variation, "max_variation")
-    return levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation
+def _settings_record(options: _core.DecomposeOptions) -> dict:
+    """The scale space's settings as a decomposition's settings keep them."""
+    return dict(levels=options.levels, decimation=options.decimation, kernel=options.kernel,
+                neighbors=options.mls.neighbors, tolerance=options.mls.tolerance,
+                max_iterations=options.mls.max_iterations, max_variation=options.max_variation)
 
 
 def _require_round_trip(dec: "Decomposition", points: np.ndarray, why: str) -> None:
@@ -452,34 +439,27 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     diffusion = None
     if smoother == "diffusion":
         diffusion = smoother_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
-    levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation = _scale_space_options(
-        levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation)
-    need = _points_needed(levels, decimation, "decompose")
-    p = as_points(points)
-    if len(p) < need:
-        raise ValueError(f"decompose needs at least {need} points for levels={levels} and decimation={decimation} "
-                         f"(the coarsest level keeps decimation**(levels-1) of them and needs {MIN_COARSE_POINTS}); "
-                         f"got {len(p)}")
-    require_surface(p)
+    options = _scale_space(levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation,
+                           thin_sheets=bool(sheets))
+    levels, decimation = options.levels, options.decimation
+    p = as_array(points)
+    n_arr = None if normals is None else as_array(normals, "normals")
+    # The core checks the settings, the points (count, surface, coordinates) and the normals;
+    # here on the raw points, before they are centred and their sides estimated.
+    _core.check_decompose_input(p, n_arr, options, diffusion=diffusion)
     message = coarse_base_warning(len(p), levels, decimation)
     if message:
         warnings.warn(message, stacklevel=2)
-    n_arr = as_normals_of(normals, p)
     if sheets:
         from .sheets import sheet_sides
         n_arr = sheet_sides(p, n_arr, threads)
     progress = as_callback(progress)
     origin = centre(p)
-    settings = dict(levels=levels, decimation=decimation, kernel=kernel, neighbors=neighbors,
-                    tolerance=tolerance, max_iterations=max_iterations, max_variation=max_variation,
-                    smoother=smoother, encoding=encoding)
+    settings = dict(_settings_record(options), smoother=smoother, encoding=encoding)
     if sheets:
         settings["sheets"] = True
     if diffusion is not None:
         settings["diffusion"] = settings_record(diffusion)
-    options = _core.DecomposeOptions(
-        levels=levels, decimation=decimation, kernel=kernel, max_variation=max_variation, thin_sheets=bool(sheets),
-        mls=_core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations))
     model = _core.decompose(p, origin, n_arr, options=options, diffusion=diffusion, progress=progress,
                             threads=thread_option(threads))
     dec = Decomposition(model, origin, settings)
@@ -493,16 +473,16 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
 def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> Decomposition:
     """decompose() of each connected part alone, joined into one Decomposition (pointscale.parts)."""
     from .parts import decompose_parts, levels_kept, parts_warning
-    levels = positive(levels, "levels", integer=True, maximum=MAX_LEVELS)
-    if levels < 2:
-        raise ValueError(f"levels must be at least 2 (a base and one band), got {levels}")
-    decimation = _decimation_option(options["decimation"])
-    neighbors = positive(options["neighbors"], "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
-    need = _points_needed(levels, decimation, "decompose")
+    scale_space = _scale_space(levels, options["decimation"], options["kernel"], options["neighbors"],
+                               options["tolerance"], options["max_iterations"], options["max_variation"])
+    scale_space.validate()  # before the parts' sizes are weighed with them
+    levels, decimation, neighbors = scale_space.levels, scale_space.decimation, scale_space.mls.neighbors
+    need = _core.points_needed(scale_space)
     sizes = np.bincount(labels, minlength=count)
     if levels_kept(sizes, levels, decimation, neighbors, MIN_COARSE_POINTS).max() < 2:
+        need_two = _core.points_needed(_core.DecomposeOptions(levels=2, decimation=decimation))
         raise ValueError(f"every connected part is too small to decompose: the largest has {sizes.max()} points, and "
-                         f"levels=2 needs at least {_points_needed(2, decimation, 'decompose')} "
+                         f"levels=2 needs at least {need_two} "
                          f"(levels={levels} needs {need}). Decompose without faces and edges to treat the parts "
                          "as one surface")
     require_extent(p)
@@ -550,12 +530,10 @@ def _gains_array(dec: Decomposition, gains) -> np.ndarray:
         g = np.asarray(gains, dtype=np.float64)
     except (TypeError, ValueError):
         raise ValueError("gains must be numbers: (k,) per band or (k, n) per point") from None
-    if g.shape not in ((k,), (k, n)):
+    # The core checks the shape, finiteness and size (validation.h); a mirrored decomposition's
+    # gains are first the half's, which only this package knows.
+    if g.ndim not in (1, 2) or (dec._mirror is not None and g.ndim == 2 and g.shape != (k, n)):
         raise ValueError(f"gains must have shape ({k},) per band or ({k}, {n}) per point, got {g.shape}")
-    if not np.isfinite(g).all():
-        raise ValueError("gains contain NaN or infinite values")
-    if g.size and np.abs(g).max() > MAX_GAIN:
-        raise ValueError(f"gains must be within +-{MAX_GAIN:.0e}, got {np.abs(g).max():.3g}")
     if g.ndim == 2 and dec._mirror is not None:
         g = dec._mirror.full_values(g)  # a point's reflections take its gains
     return np.ascontiguousarray(g)
@@ -568,12 +546,12 @@ def _base_array(dec: Decomposition, base):
     is symmetric only to rounding and its clusters' asymmetry, which an edit must not add)."""
     if base is None:
         return None
-    b = as_points(base, "base")
-    if b.shape[0] != dec.n_points:
-        raise ValueError(f"base must have the decomposition's {dec.n_points} points, got {b.shape[0]}")
-    require_near(b, dec.origin, "base", "the decomposition")
+    b = as_points(base, "base")  # its count and reach the core checks (validation.h)
     if dec._mirror is None:
         return b
+    if b.shape[0] != dec.n_points:  # the half's, which only this package knows
+        raise ValueError(f"base must have the decomposition's {dec.n_points} points, got {b.shape[0]}")
+    require_near(b, dec.origin, "base", "the decomposition")
     return (dec._model.base + dec.origin) + dec._mirror.full_vectors(b - dec.base)
 
 
@@ -686,32 +664,23 @@ def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decima
     """
     if smoother not in ("mls", "diffusion"):
         raise ValueError(f"smoother must be 'mls' or 'diffusion', got {smoother!r}")
-    levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation = _scale_space_options(
-        levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation)
+    options = _scale_space(levels, decimation, kernel, neighbors, tolerance, max_iterations, max_variation)
     diffusion = None
     if smoother == "diffusion":
         diffusion = smoother_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
-    need = _points_needed(levels, decimation, "decompose_rayshoot")
-    p = as_points(points)
-    if len(p) < need:
-        raise ValueError(f"decompose_rayshoot needs at least {need} points for levels={levels} and "
-                         f"decimation={decimation}; got {len(p)}")
-    require_surface(p)
-    n_arr = as_normals_of(normals, p)
-    limit = 0.0 if max_distance is None else positive(max_distance, "max_distance")
-    fine_kernel = kernel_option(fine_kernel, "fine_kernel")
+    p = as_points(points)  # the core checks the rest, once centred
+    n_arr = None if normals is None else as_array(normals, "normals")
+    limit = 0.0 if max_distance is None else number(max_distance, "max_distance")
+    fine_kernel = number(fine_kernel, "fine_kernel")
     origin = centre(p)
-    options = _core.DecomposeOptions(
-        levels=levels, decimation=decimation, kernel=kernel, max_variation=max_variation,
-        mls=_core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations))
     # The rays take more iterations than the projections: a ray's first plane can lie far off.
-    rays = _core.RayOptions(neighbors=neighbors, max_iterations=max(max_iterations, 50), max_distance=limit)
+    rays = _core.RayOptions(neighbors=options.mls.neighbors, max_iterations=max(options.mls.max_iterations, 50),
+                            max_distance=limit)
     model, missed = _core.decompose_rayshoot(p - origin, n_arr, options=options, diffusion=diffusion, rays=rays,
                                              fine_kernel=fine_kernel, progress=as_callback(progress),
                                              threads=thread_option(threads))
-    settings = dict(levels=levels, decimation=decimation, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
-                    max_iterations=max_iterations, max_variation=max_variation, smoother=smoother,
-                    encoding="rayshoot", rays_missed=[int(len(m)) for m in missed])
+    settings = dict(_settings_record(options), smoother=smoother, encoding="rayshoot",
+                    rays_missed=[int(len(m)) for m in missed])
     dec = Decomposition(model, origin, settings, _missed_rays=[np.asarray(m) for m in missed])
     _require_finite_model(dec)
     return dec

@@ -8,11 +8,11 @@ import warnings
 import numpy as np
 
 from . import _core
-from ._checks import (MAX_DIFFUSION_ITERATIONS, MAX_ITERATIONS, MAX_LEVELS, MAX_NEIGHBORS, as_callback, as_normals_of, as_points,
-                      centre, finite_result, kernel_option, positive, require_extent, require_near,
-                      require_stable_diffusion, require_surface, thread_option)
-from ._diffusion import diffusion_settings
-from .multiscale import MIN_COARSE_POINTS, Decomposition, _require_finite_model
+from ._checks import (MAX_DIFFUSION_ITERATIONS, MAX_LEVELS, MIN_COARSE_POINTS, as_array, as_callback, as_normals_of,
+                      as_points, centre, finite_result, mls_options, number, positive, require_extent, require_near,
+                      require_surface, thread_option)
+from ._diffusion import diffusion_options
+from .multiscale import Decomposition, _require_finite_model
 from .multiscale import decompose_rayshoot, rays_missed_points  # noqa: F401  (still importable from here)
 
 
@@ -26,20 +26,17 @@ def smooth_diffusion(points, iterations: int = 10, *, lam: float = 0.5, taubin: 
     lam         step in [0.001, 1]
     taubin      alternate each step with a negative one, mu = 1 / (0.1 - 1/lam) (Taubin 1995),
                 which keeps the volume that plain Laplacian smoothing shrinks away
-    mu          Taubin's negative step, in [-1000, -lam); overrides taubin
+    mu          Taubin's negative step, in [-1000, -lam), or 0 for plain smoothing; overrides taubin
     A lam|mu pair lifts some frequencies slightly above 1 per iteration (mu = -10 with lam = 0.5
     by 5.5x, the default Taubin pair by 1.00066x); iterations that would lift one more than 4x
     in all, which inflates the shape and ends in NaN, raise ValueError.
     neighbors   k, the point itself included
     Returns the smoothed (n, 3) points, indexed like the input.
     """
-    iterations = positive(iterations, "iterations", integer=True, maximum=MAX_DIFFUSION_ITERATIONS)
-    neighbors, lam, mu = diffusion_settings(lam, mu, taubin, neighbors)
-    require_stable_diffusion(lam, mu, iterations)
-    p = as_points(points, min_count=neighbors)
-    require_extent(p, minimum=False)
+    options = diffusion_options(iterations, lam, mu, taubin, neighbors)
+    options.validate()  # the core's check, before the points are counted against the neighbours
+    p = as_points(points, min_count=options.neighbors)
     origin = centre(p)
-    options = _core.DiffusionOptions(neighbors=neighbors, lam=lam, mu=mu, iterations=iterations)
     out = _core.diffuse(p - origin, options, progress=as_callback(progress), threads=thread_option(threads)) + origin
     return finite_result(out, "the smoothed points")
 
@@ -53,18 +50,18 @@ def diffusion_levels(points, levels: int = 4, *, iterations: int = 10, growth: f
     of all levels together are bounded like smooth_diffusion's iterations (at most 10000).
     """
     levels = positive(levels, "levels", integer=True, minimum=2, maximum=MAX_LEVELS)
-    iterations = positive(iterations, "iterations", integer=True, maximum=MAX_DIFFUSION_ITERATIONS)
     growth = positive(growth, "growth", minimum=1.0, maximum=1e3)
-    neighbors, lam, mu = diffusion_settings(lam, mu, taubin, neighbors)
+    first = diffusion_options(iterations, lam, mu, taubin, neighbors)
+    first.validate()  # the core's checks of the first level's settings
+    iterations, neighbors, lam, mu = first.iterations, first.neighbors, first.lam, first.mu
     # The steps per level grow geometrically: bound their sum, like smooth_diffusion's iterations.
     total = sum(float(np.round(iterations * growth ** step)) for step in range(levels - 1))
     if total > MAX_DIFFUSION_ITERATIONS:
         raise ValueError(f"levels={levels}, iterations={iterations} and growth={growth:g} take {total:.3g} diffusion "
                          f"steps in all; at most {MAX_DIFFUSION_ITERATIONS} are allowed (use fewer levels, "
                          "iterations or a smaller growth)")
-    require_stable_diffusion(lam, mu, int(total), "the total of iterations over the levels")
+    _core.check_stable_diffusion(lam, mu, int(total), "the total of iterations over the levels")
     p = as_points(points, min_count=neighbors)
-    require_extent(p, minimum=False)
     origin = centre(p)
     threads = thread_option(threads)
     out = [p - origin]
@@ -89,25 +86,19 @@ def project_sheets(points, onto, *, kernel: float = 1.0, sheet: float = 0.2, ont
     Returns (positions, normals) and, with return_report, a dict like project().
     """
     x = as_points(points)
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3, maximum=MAX_NEIGHBORS)
     s = as_points(onto, "onto", min_count=3)
     require_surface(s, "onto", allow_planar=True)
     require_near(x, centre(s), "points", "onto")
-    kernel = kernel_option(kernel)
-    sheet = positive(sheet, "sheet", minimum=1e-3)
-    if sheet > 1.0:
-        raise ValueError(f"sheet must be in [0.001, 1] (a fraction of the kernel width), got {sheet}")
-    tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
+    kernel, sheet = number(kernel, "kernel"), number(sheet, "sheet")
+    mls = mls_options(neighbors, tolerance, max_iterations)
     nrm = as_normals_of(onto_normals, s, "onto_normals", "onto")
-    if nrm is not None:
+    if nrm is not None:  # unit normals for the core: turning them so is this package's conversion
         if not (np.linalg.norm(nrm, axis=1) > 0).all():
             raise ValueError("onto_normals contains zero vectors")
         nrm = nrm / np.linalg.norm(nrm, axis=1)[:, None]
         if not np.isfinite(nrm).all():
             raise ValueError("onto_normals has vectors too short to normalise")
     origin = centre(s)
-    mls = _core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations)
     pos, n, not_converged, degenerate = _core.project_sheets(x - origin, s - origin, onto_normals=nrm, kernel=kernel,
                                                              mls=mls, sheet=sheet, progress=as_callback(progress),
                                                              threads=thread_option(threads))
@@ -129,25 +120,21 @@ def shoot_rays(origins, directions, onto, *, kernel: float = 1.0, neighbors: int
     """
     o = as_points(origins, "origins")
     d = as_points(directions, "directions")
-    if d.shape != o.shape:
-        raise ValueError(f"directions must have the shape of origins {o.shape}, got {d.shape}")
+    # Unit directions for the core, which checks that they are: turning them so is this
+    # package's conversion, and a zero vector has no direction to turn.
     length = np.linalg.norm(d, axis=1)
     if not (length > 0).all():
         raise ValueError(f"directions contains {int((length == 0).sum())} zero vectors")
     unit = d / length[:, None]
-    if not (np.isfinite(unit).all() and (np.abs(np.linalg.norm(unit, axis=1) - 1.0) < 1e-6).all()):
-        raise ValueError("directions contains vectors too short to normalise")
     s = as_points(onto, "onto", min_count=3)
     require_surface(s, "onto", allow_planar=True)
     origin = centre(s)
-    require_near(o, origin, "origins", "onto")
-    kernel = kernel_option(kernel)
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3, maximum=MAX_NEIGHBORS)
-    limit = 0.0 if max_distance is None else positive(max_distance, "max_distance")
-    tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
-    rays = _core.RayOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations,
+    limit = 0.0 if max_distance is None else number(max_distance, "max_distance")
+    rays = _core.RayOptions(neighbors=number(neighbors, "neighbors", integer=True),
+                            tolerance=number(tolerance, "tolerance"),
+                            max_iterations=number(max_iterations, "max_iterations", integer=True),
                             max_distance=limit, min_cosine=0.05)
+    kernel = number(kernel, "kernel")
     hits, dist, missed = _core.shoot_rays(o - origin, unit, s - origin, kernel=kernel, options=rays,
                                           threads=thread_option(threads))
     return finite_result(hits + origin, "the ray hits"), finite_result(dist, "the ray distances"), missed
@@ -180,27 +167,29 @@ def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neigh
             options = dict(base_normals=base_normals, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
                            max_iterations=max_iterations, max_variation=max_variation, threads=threads)
             return _encode_by_part(points, base_points, labels, count, options, progress)
+    options = _encode_options(kernel, neighbors, tolerance, max_iterations, max_variation)
+    # The raw coordinates here; the core checks the rest (settings, the base's surface, reach,
+    # normals) on the centred points.
     p = as_points(points, min_count=MIN_COARSE_POINTS)
     b = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)
-    require_surface(b, "base_points", allow_planar=True)
-    require_near(p, centre(b), "points", "base_points")
-    kernel = kernel_option(kernel)
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
-    tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
-    max_variation = positive(max_variation, "max_variation")
-    bn = as_normals_of(base_normals, b, "base_normals", "base_points")
+    bn = None if base_normals is None else as_array(base_normals, "base_normals")
     origin = centre(np.vstack([p, b]))
-    options = _core.EncodeOptions(
-        kernel=kernel, max_variation=max_variation,
-        mls=_core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations))
     model = _core.encode(p - origin, b - origin, base_normals=bn, options=options, progress=as_callback(progress),
                          threads=thread_option(threads))
-    settings = dict(levels=2, encoding="base", kernel=kernel, neighbors=neighbors, tolerance=tolerance,
-                    max_iterations=max_iterations, max_variation=max_variation, base_points=len(b))
+    mls = options.mls
+    settings = dict(levels=2, encoding="base", kernel=options.kernel, neighbors=mls.neighbors,
+                    tolerance=mls.tolerance, max_iterations=mls.max_iterations,
+                    max_variation=options.max_variation, base_points=len(b))
     dec = Decomposition(model, origin, settings)
     _require_finite_model(dec)
     return dec
+
+
+def _encode_options(kernel, neighbors, tolerance, max_iterations, max_variation) -> _core.EncodeOptions:
+    """encode()'s settings as the core takes them, the numbers converted; the core checks them."""
+    mls = mls_options(neighbors, tolerance, max_iterations)
+    return _core.EncodeOptions(kernel=number(kernel, "kernel"), max_variation=number(max_variation, "max_variation"),
+                               mls=mls)
 
 
 def _encode_by_part(points, base_points, labels, count, options, progress) -> Decomposition:
@@ -209,7 +198,10 @@ def _encode_by_part(points, base_points, labels, count, options, progress) -> De
     p = as_points(points)
     b = as_points(base_points, "base_points", min_count=MIN_COARSE_POINTS)
     require_near(p, centre(b), "points", "base_points")
-    neighbors = positive(options["neighbors"], "neighbors", integer=True, minimum=4, maximum=MAX_NEIGHBORS)
+    checked = _encode_options(options["kernel"], options["neighbors"], options["tolerance"], options["max_iterations"],
+                              options["max_variation"])
+    checked.validate()  # before the parts' sizes are weighed with them
+    neighbors = checked.mls.neighbors
     origin = centre(np.vstack([p, b]))
     if np.bincount(labels, minlength=count).max() < MIN_COARSE_POINTS:
         raise ValueError(f"every connected part is too small to encode (each needs {MIN_COARSE_POINTS} points); "

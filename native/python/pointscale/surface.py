@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from . import _core
-from ._checks import (MAX_ITERATIONS, MAX_NEIGHBORS, as_callback, as_points, centre, finite_result, kernel_option,
-                      positive, require_extent, require_near, require_surface, thread_option)
+from ._checks import (as_callback, as_points, centre, finite_result, mls_options, number, positive, require_extent,
+                      require_near, require_surface, thread_option)
 
 
 def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance: float = 1e-9,
@@ -37,18 +37,17 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
     Normals are unit and unoriented.
     """
     x = as_points(points)
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3, maximum=MAX_NEIGHBORS)
+    mls = mls_options(neighbors, tolerance, max_iterations)
+    mls.validate()  # the core's check; single_pass reads tolerance for its report only
     s = as_points(onto, "onto", min_count=3)
     require_surface(s, "onto", allow_planar=True)
     require_near(x, centre(s), "points", "onto")
-    kernel = kernel_option(kernel)
-    tolerance = positive(tolerance, "tolerance")
-    max_iterations = positive(max_iterations, "max_iterations", integer=True, maximum=MAX_ITERATIONS)
-    if near is not None:
+    kernel = number(kernel, "kernel")
+    if near is not None:  # its count and range the core checks
         near = np.asarray(near)
-        if near.shape != (len(x),) or not np.issubdtype(near.dtype, np.integer):
+        if near.ndim != 1 or not np.issubdtype(near.dtype, np.integer):
             raise ValueError(f"near must be ({len(x)},) integers (an index into onto), got {near.dtype} {near.shape}")
-        if len(near) and (near.min() < 0 or near.max() >= len(s)):
+        if len(near) and (near.min() < np.iinfo(np.int32).min or near.max() > np.iinfo(np.int32).max):
             raise ValueError(f"near must index onto: each in [0, {len(s) - 1}], got [{near.min()}, {near.max()}]")
         near = near.astype(np.int32)
     if not isinstance(single_pass, (bool, np.bool_)):
@@ -56,8 +55,7 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
     origin = centre(s)
     threads = thread_option(threads)
     if single_pass:
-        return _single_pass(x, s, origin, kernel, neighbors, tolerance, progress, return_report, threads)
-    mls = _core.MlsOptions(neighbors=neighbors, tolerance=tolerance, max_iterations=max_iterations)
+        return _single_pass(x, s, origin, kernel, mls.neighbors, mls.tolerance, progress, return_report, threads)
     pos, nrm, not_converged, degenerate = _core.project(x - origin, s - origin, kernel=kernel, mls=mls,
                                                         progress=as_callback(progress), near=near, threads=threads)
     pos = finite_result(pos + origin, "the projection")
@@ -108,9 +106,8 @@ def decimate(points, target: int, *, max_variation: float = 0.05):
 def estimate_normals(points, neighbors: int = 16, *, orient: bool = True, threads: int = 0) -> np.ndarray:
     """Unit PCA normals of each point's neighbourhood, consistently oriented (outward on closed
     shapes) by spanning-tree propagation when orient is True. Returns (n, 3)."""
-    neighbors = positive(neighbors, "neighbors", integer=True, minimum=3, maximum=MAX_NEIGHBORS)
-    p = as_points(points, min_count=neighbors)
-    require_surface(p, allow_planar=True)
+    neighbors = number(neighbors, "neighbors", integer=True)
+    p = as_points(points)  # the core checks the neighbours, the count and the surface
     normals = _core.estimate_normals(p - centre(p), neighbors=neighbors, orient=bool(orient),
                                      threads=thread_option(threads))
     return finite_result(normals, "the normals")
