@@ -1,7 +1,6 @@
 #include "pointscale/ray_shooting.h"
 
 #include <stdexcept>
-#include <string>
 
 #include "pointscale/validation.h"
 
@@ -21,13 +20,7 @@ namespace pointscale {
 RayHits shoot_rays(const Points& origins, const Points& directions, const SpatialIndex& support,
                    const Eigen::VectorXd& h, const RayOptions& options, const ProgressStage& stage) {
   validate(options);
-  check_points(origins, "origins");
-  if (directions.rows() != origins.rows())
-    throw std::invalid_argument("directions must have the shape of origins (" + std::to_string(origins.rows()) +
-                                ", 3), got (" + std::to_string(directions.rows()) + ", 3)");
-  check_points(directions, "directions");
-  if (((directions.rowwise().norm().array() - 1.0).abs() >= 1e-6).any())
-    throw std::invalid_argument("directions must be unit vectors");
+  check_rays(origins, directions);
   if (h.size() != support.size()) throw std::invalid_argument("h must hold one kernel width per support point");
   check_near(origins, bounding_box_centre(support.points()), "origins", "onto");
   const Eigen::Index n = origins.rows();

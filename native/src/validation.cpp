@@ -24,12 +24,16 @@ std::string format(const char* f, ...) {
 
 [[noreturn]] void fail(const std::string& message) { throw std::invalid_argument(message); }
 
-// A number as Python's repr writes it, closely enough for a message: the fewest digits that
-// read back as the same double.
+// A number as Python's repr writes it, so that a message quotes what the caller typed: the
+// fewest digits that read back as the same double, in fixed notation from 1e-4 to 1e16
+// ("10000.0", "0.25"), else in exponent notation ("1e-07").
 std::string number(double v) {
-  for (int digits = 1; digits < 17; ++digits) {
-    const std::string s = format("%.*g", digits, v);
-    if (std::strtod(s.c_str(), nullptr) == v) return s;
+  if (!std::isfinite(v)) return std::isnan(v) ? "nan" : (v > 0 ? "inf" : "-inf");
+  const double magnitude = std::abs(v);
+  const bool fixed = v == 0.0 || (magnitude >= 1e-4 && magnitude < 1e16);
+  for (int digits = 0; digits <= 17; ++digits) {
+    const std::string s = format(fixed ? "%.*f" : "%.*e", digits, v);
+    if (std::strtod(s.c_str(), nullptr) == v) return fixed && digits == 0 ? s + ".0" : s;
   }
   return format("%.17g", v);
 }
@@ -155,6 +159,15 @@ void check_near_support(const IndexList& near, Eigen::Index points, Eigen::Index
   const auto [lo, hi] = std::minmax_element(near.begin(), near.end());
   if (*lo < 0 || *hi >= support)
     fail(format("near must index onto: each in [0, %lld], got [%d, %d]", static_cast<long long>(support - 1), *lo, *hi));
+}
+
+void check_rays(const PointsRef& origins, const PointsRef& directions) {
+  check_points(origins, "origins");
+  if (directions.rows() != origins.rows())
+    fail(format("directions must have the shape of origins (%lld, 3), got (%lld, 3)",
+                static_cast<long long>(origins.rows()), static_cast<long long>(directions.rows())));
+  check_points(directions, "directions");
+  if (((directions.rowwise().norm().array() - 1.0).abs() >= 1e-6).any()) fail("directions must be unit vectors");
 }
 
 void check_kernel(double kernel, const char* name) {

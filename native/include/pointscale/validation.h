@@ -73,6 +73,10 @@ void check_normal_estimation(const PointsRef& points, int k);
 //       each in [0, #S)
 void check_near_support(const IndexList& near, Eigen::Index points, Eigen::Index support);
 
+// origins     #R by 3 (check_points)
+// directions  #R by 3 unit vectors
+void check_rays(const PointsRef& origins, const PointsRef& directions);
+
 // A kernel width as a multiple of the local spacing, in [min_kernel, max_kernel].
 void check_kernel(double kernel, const char* name = "kernel");
 

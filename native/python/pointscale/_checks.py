@@ -78,7 +78,8 @@ def require_extent(points: np.ndarray, name: str = "points", minimum: bool = Tru
 
 
 def require_near(points: np.ndarray, origin: np.ndarray, name: str, other: str) -> None:
-    """The core's check_near: refuses points farther than MAX_EXTENT from the centre of `other`."""
+    """The core's check_near: refuses points farther than MAX_EXTENT from `origin`, the centre of
+    the set named `other`."""
     _core.check_near(points, np.asarray(origin, dtype=np.float64), name, other)
 
 
@@ -126,13 +127,9 @@ def positive(value, name: str, integer: bool = False, minimum=None, maximum=None
 def thread_option(threads) -> int:
     """`threads` as an int for one core call, which checks it (0 for all cores, else up to
     1024) and runs on that many threads, leaving no count behind for other calls."""
-    if isinstance(threads, (bool, np.bool_)) or not isinstance(threads, (numbers.Integral, float, np.floating)):
-        raise ValueError(f"threads must be a whole number in [0, 1024] (0: all cores), got {threads!r}")
-    if isinstance(threads, (float, np.floating)) and not (np.isfinite(threads) and threads == int(threads)):
-        raise ValueError(f"threads must be a whole number in [0, 1024] (0: all cores), got {threads!r}")
-    t = int(threads)
-    if abs(t) > _INT_MAX:
-        t = -1 if t < 0 else _INT_MAX  # the core's message then gives the range
+    if not isinstance(threads, (numbers.Integral, float, np.floating)):
+        raise ValueError(f"threads must be a whole number, 0 for all cores, got {threads!r}")
+    t = number(threads, "threads", integer=True)
     _core.check_threads(t)
     return t
 
