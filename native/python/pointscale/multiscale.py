@@ -405,7 +405,7 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
                 symmetric about those planes; the whole model is decomposed and every output is
                 exactly symmetric, points on a plane stay on it (pointscale.mirror)
     Supported input: coordinates within +-1e150, spanning 1e-50 to 1e50 about their centre
-    (_checks.py says why); levels up to 64, kernel 0.001..1000, max_iterations up to 1000,
+    (the core's validation.h says why); levels up to 64, kernel 0.001..1000, max_iterations up to 1000,
     diffusion_iterations up to 10000 and below what Taubin's lam|mu pair keeps stable. Anything
     else raises ValueError, as does a diffusion that would not give the input back.
     """
