@@ -189,3 +189,23 @@ def test_each_check_is_written_once(fragment):
     sources = [p for p in (REPO / "native").rglob("*") if p.suffix in (".cpp", ".h", ".py")]
     holders = [p.relative_to(REPO).as_posix() for p in sources if fragment in p.read_text(encoding="utf-8")]
     assert holders == ["native/src/validation.cpp"], holders
+
+
+def test_the_fold_functions_check_their_input_in_the_core(dec):
+    model = dec._model
+    ref = _core.fold_reference(model)
+    wrong = np.zeros((10, 3))
+    same_message(lambda: ps.find_folds(dec, wrong), lambda: _core.find_folds(model, ref, wrong),
+                 "points must have the decomposition's 3000 points, got 10")
+    result = ps.reconstruct(dec, [2.0, 2.0])
+    assert "max_rounds must be at most 1000" in message(lambda: _core.limit_folds(model, ref, result.copy(),
+                                                                                   max_rounds=5000))
+    other = ps.decompose(ps.shapes.bumpy_sphere(2000), levels=3)._model
+    assert "made for another model" in message(lambda: _core.find_folds(other, ref, result[:2000]))
+    assert "input must have the decomposition's" in message(lambda: _core.fold_reference(model, input=wrong))
+
+
+def test_parts_rows_are_checked_by_the_core():
+    labels = np.zeros(len(GOOD), np.int32)
+    assert "k must be at least 1" in message(lambda: _core.knn_within_parts(GOOD, labels, k=0))
+    assert "part label out of range" in message(lambda: _core.knn_within_parts(GOOD, labels - 1, k=4))

@@ -133,14 +133,6 @@ MultiscaleModel model_from_arrays(const py::dict& d) {
   return m;
 }
 
-// A fold reference made for a model of n points, before folds.h reads it.
-void require_reference(const FoldReference& r, Eigen::Index n) {
-  const std::size_t un = static_cast<std::size_t>(n);
-  if (r.other_sheet.size() != un || (!r.exempt.empty() && r.exempt.size() != un) ||
-      r.rings.size() != un * static_cast<std::size_t>(r.ring_size))
-    throw std::invalid_argument("the fold reference was made for another model");
-}
-
 // A decomposition's reconstruction storage, kept between reconstruct() calls (the pointscale
 // package keeps one beside each model). A call that finds it in use works without it.
 struct ReconstructionBuffers {
@@ -251,21 +243,17 @@ PYBIND11_MODULE(_core, m) {
       });
   m.def("fold_reference", [](const MultiscaleModel& s, py::object input, int threads) {
     const OptionalPoints in(input);
-    if (in.present && in.p.rows() != s.base.rows()) throw std::invalid_argument("input must be (n, 3)");
     return without_gil(threads, [&] { return fold_reference(s, in.get()); });
   }, py::arg("model"), py::arg("input") = py::none(), py::arg("threads") = 0);
 
   m.def("find_folds", [](const MultiscaleModel& s, const FoldReference& ref, const DoubleArray& result,
                          py::object base, int threads) {
-    const Eigen::Index n = s.base.rows();
-    require_reference(ref, n);
-    if (result.ndim() != 2 || result.shape(0) != n || result.shape(1) != 3) throw std::invalid_argument("result must be (n, 3)");
+    if (result.ndim() != 2 || result.shape(1) != 3) throw std::invalid_argument("result must be an (n, 3) array");
     const OptionalPoints edited(base);
-    if (edited.present && edited.p.rows() != n) throw std::invalid_argument("base must be (n, 3)");
-    const Eigen::Map<const Points> r(result.data(), n, 3);
+    const Eigen::Map<const Points> r(result.data(), result.shape(0), 3);  // find_folds checks the rest
     std::vector<std::uint8_t> kind;
     without_gil(threads, [&] { find_folds(s, ref, edited.get(), r, kind); });
-    return to_array(kind, {static_cast<py::ssize_t>(n)});
+    return to_array(kind, {static_cast<py::ssize_t>(kind.size())});
   }, py::arg("model"), py::arg("reference"), py::arg("result"), py::arg("base") = py::none(),
      py::arg("threads") = 0);
 
@@ -274,15 +262,11 @@ PYBIND11_MODULE(_core, m) {
   m.def("limit_folds", [](const MultiscaleModel& s, const FoldReference& ref,
                           py::array_t<double, py::array::c_style> result, py::object base, py::object origin,
                           int max_rounds, int smoothing, int threads) {
-    const Eigen::Index n = s.base.rows();
-    require_reference(ref, n);
-    if (!result.writeable() || result.ndim() != 2 || result.shape(0) != n || result.shape(1) != 3)
+    if (!result.writeable() || result.ndim() != 2 || result.shape(1) != 3)
       throw std::invalid_argument("result must be a writable C-contiguous float64 (n, 3) array");
-    if (max_rounds < 0 || max_rounds > 1000) throw std::invalid_argument("max_rounds must be in 0..1000");
-    if (smoothing < 0 || smoothing > 64) throw std::invalid_argument("smoothing must be in 0..64");
     const OptionalPoints edited(base);
-    if (edited.present && edited.p.rows() != n) throw std::invalid_argument("base must be (n, 3)");
     const Vec3 o = to_origin(origin);
+    const Eigen::Index n = result.shape(0);  // limit_folds checks it and the rest
     Eigen::Map<Points> r(result.mutable_data(), n, 3);
     FoldLimitOptions options;
     options.max_rounds = max_rounds;
@@ -314,10 +298,8 @@ PYBIND11_MODULE(_core, m) {
   // Every point's k nearest of its own part (itself first), #P by k; parts (#P,) labels.
   m.def("knn_within_parts", [](const DoubleArray& points, const IndexArray& parts, int k, int threads) {
     const Points p = to_points(points);
-    if (parts.ndim() != 1 || parts.shape(0) != p.rows()) throw py::value_error("parts must be (n,)");
-    if (k < 1) throw py::value_error("k must be at least 1");
-    const IndexList labels(parts.data(), parts.data() + parts.size());
-    for (Index v : labels) if (v < 0 || v >= p.rows()) throw py::value_error("part label out of range");
+    if (parts.ndim() != 1) throw py::value_error("parts must be (n,)");
+    const IndexList labels(parts.data(), parts.data() + parts.size());  // knn_within_parts checks them
     const IndexList rows = without_gil(threads, [&] { return knn_within_parts(p, labels, k); });
     return to_array(rows, {static_cast<py::ssize_t>(p.rows()), k});
   }, py::arg("points"), py::arg("parts"), py::arg("k"), py::arg("threads") = 0);

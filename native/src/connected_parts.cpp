@@ -6,6 +6,7 @@
 
 #include "pointscale/parallel.h"
 #include "pointscale/spatial_index.h"
+#include "pointscale/validation.h"
 
 namespace pointscale {
 
@@ -69,6 +70,7 @@ Parts connected_parts(const Points& points, const IndexList& pairs) {
 }
 
 IndexList knn_within_parts(const Points& points, const IndexList& parts, int k) {
+  check_parts(parts, points.rows(), k);
   const std::size_t width = static_cast<std::size_t>(k);
   IndexList out(static_cast<std::size_t>(points.rows()) * width);
   if (parts.empty()) return out;

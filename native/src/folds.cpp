@@ -3,10 +3,12 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "pointscale/edit_rotations.h"
 #include "pointscale/parallel.h"
 #include "pointscale/spatial_order.h"
+#include "pointscale/validation.h"
 
 namespace pointscale {
 
@@ -131,6 +133,8 @@ std::uint16_t folding_bits(const FoldReference& ref, std::uint16_t skip, const S
 }  // namespace
 
 FoldReference fold_reference(const MultiscaleModel& model, const Points* input) {
+  validate(model);
+  if (input) check_rows(input->rows(), model.base.rows(), "input");
   static_assert(base_ring_size <= 16, "ring bits are 16 wide");
   const std::size_t n = static_cast<std::size_t>(model.base.rows());
   FoldReference ref;
@@ -192,6 +196,7 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input) 
 
 std::size_t find_folds(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
                        Eigen::Ref<const Points> result, std::vector<std::uint8_t>& kind) {
+  check_folds_input(model, ref, edited, result);
   const std::size_t n = static_cast<std::size_t>(model.base.rows());
   kind.assign(n, fold_none);
   const bool exempting = !ref.exempt.empty();
@@ -207,8 +212,11 @@ std::size_t find_folds(const MultiscaleModel& model, const FoldReference& ref, c
   return n - static_cast<std::size_t>(std::count(kind.begin(), kind.end(), std::uint8_t(fold_none)));
 }
 
-void find_folds_at(const MultiscaleModel&, const FoldReference& ref, const Points* edited,
-                   Eigen::Ref<const Points> result, const IndexList& points, std::vector<std::uint8_t>& kind) {
+namespace {
+
+// find_folds_at on checked input: limit_folds calls it every round.
+void folds_at(const FoldReference& ref, const Points* edited, Eigen::Ref<const Points> result,
+              const IndexList& points, std::vector<std::uint8_t>& kind) {
   const bool exempting = !ref.exempt.empty();
   const SlotRows r = by_point(result, ref);
   SlotRows e{nullptr, 3, nullptr};
@@ -223,8 +231,21 @@ void find_folds_at(const MultiscaleModel&, const FoldReference& ref, const Point
   }, {}, 1024);
 }
 
+}  // namespace
+
+void find_folds_at(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
+                   Eigen::Ref<const Points> result, const IndexList& points, std::vector<std::uint8_t>& kind) {
+  check_folds_input(model, ref, edited, result);
+  if (kind.size() != static_cast<std::size_t>(result.rows())) throw std::invalid_argument("kind must have #P entries");
+  for (Index i : points)
+    if (i < 0 || i >= result.rows()) throw std::invalid_argument("points to test must be indices of points");
+  folds_at(ref, edited, result, points, kind);
+}
+
 FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
                             const Vec3& origin, Eigen::Ref<Points> result, const FoldLimitOptions& options) {
+  check_folds_input(model, ref, edited, result);
+  validate(options);
   FoldLimitReport out;
   const std::size_t n = static_cast<std::size_t>(model.base.rows());
   const std::size_t width = static_cast<std::size_t>(ref.ring_size);
@@ -333,7 +354,7 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
       for (Index k = ref.in_offsets[s]; k < ref.in_offsets[s + 1]; ++k)
         take(ref.order[static_cast<std::size_t>(ref.in_rings[static_cast<std::size_t>(k)])]);
     }
-    find_folds_at(model, ref, edited, result, check, out.after);
+    folds_at(ref, edited, result, check, out.after);
     // Folds left: among the tested points, and the folds of this round that were not tested
     // (their limiter and their rings did not move: one stronger fold beside them sets it).
     for (Index f : folds)

@@ -290,12 +290,44 @@ void check_gains(const Eigen::MatrixXd& gains, int bands, Eigen::Index points) {
   if (largest > max_gain) fail(format("gains must be within +-%.0e, got %.3g", max_gain, largest));
 }
 
+void check_rows(Eigen::Index rows, Eigen::Index points, const char* name) {
+  if (rows != points)
+    fail(format("%s must have the decomposition's %lld points, got %lld", name, static_cast<long long>(points),
+                static_cast<long long>(rows)));
+}
+
 void check_base(const PointsRef& base, Eigen::Index points, const Vec3& centre) {
-  if (base.rows() != points)
-    fail(format("base must have the decomposition's %lld points, got %lld", static_cast<long long>(points),
-                static_cast<long long>(base.rows())));
+  check_rows(base.rows(), points, "base");
   check_points(base, "base");
   check_near(base, centre, "base", "the decomposition");
+}
+
+void check_folds_input(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
+                       const PointsRef& result) {
+  const Eigen::Index n = model.base.rows();
+  const std::size_t un = static_cast<std::size_t>(n);
+  if (ref.other_sheet.size() != un || ref.order.size() != un || ref.slot.size() != un ||
+      (!ref.exempt.empty() && ref.exempt.size() != un) || ref.rings.size() != un * static_cast<std::size_t>(ref.ring_size))
+    fail("the fold reference was made for another model");
+  check_rows(result.rows(), n, "points");
+  check_points(result, "points");
+  if (edited) {
+    check_rows(edited->rows(), n, "base");
+    check_points(*edited, "base");
+  }
+}
+
+void validate(const FoldLimitOptions& options) {
+  check_count(options.max_rounds, "max_rounds", 0, 1000);
+  check_count(options.smoothing, "smoothing", 0, 64);
+  if (!(options.step > 0.0 && options.step < 1.0)) fail(format("step must be in (0, 1), got %s", number(options.step).c_str()));
+}
+
+void check_parts(const IndexList& parts, Eigen::Index points, int k) {
+  if (k < 1) fail(format("k must be at least 1, got %d", k));
+  if (static_cast<Eigen::Index>(parts.size()) != points) fail("parts must be (n,): one label per point");
+  for (Index v : parts)
+    if (v < 0 || v >= points) fail("part label out of range");
 }
 
 }  // namespace pointscale

@@ -7,6 +7,7 @@
 #include "pointscale/decomposition.h"
 #include "pointscale/diffusion.h"
 #include "pointscale/encoding.h"
+#include "pointscale/folds.h"
 #include "pointscale/mls_projection.h"
 #include "pointscale/morph.h"
 #include "pointscale/ray_shooting.h"
@@ -110,6 +111,19 @@ void check_gains(const Eigen::MatrixXd& gains, int bands, Eigen::Index points);
 // base    an edited P^0: #P rows (the model's points), finite, within max_extent of `centre`,
 //         where the model's own base is centred (zero in the model's coordinates)
 void check_base(const PointsRef& base, Eigen::Index points, const Vec3& centre);
+
+// rows  the rows of an array that holds one row per point of the decomposition (#P); name
+//       says which
+void check_rows(Eigen::Index rows, Eigen::Index points, const char* name);
+
+// What the fold functions (folds.h) take: ref made for this model (fold_reference), result
+// #P by 3 and finite (named "points", as the package calls it), edited #P by 3 or nullptr.
+void check_folds_input(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
+                       const PointsRef& result);
+void validate(const FoldLimitOptions& options);
+
+// knn_within_parts's input: parts #P labels in [0, #P), k >= 1.
+void check_parts(const IndexList& parts, Eigen::Index points, int k);
 
 // A model's structure: k >= 1 bands over #P >= 1 points, every index in range, every value
 // finite and each cluster's anchor one of its members, so that reconstruction reads nothing out

@@ -76,9 +76,7 @@ def reference_for(dec, reference: str = "input"):
     from .multiscale import reconstruct
     key = "fold_reference_" + _reference_option(reference)
 
-    def make():
-        if dec.n_bands < 1:
-            raise ValueError("the decomposition has no bands")
+    def make():  # the core checks the model and the input
         input_points = dec._full(reconstruct(dec)) if reference == "input" else None
         return _core.fold_reference(dec._model, input=input_points)
 
@@ -87,14 +85,13 @@ def reference_for(dec, reference: str = "input"):
 
 def find_folds(dec, points, base=None, *, fold_reference: str = "input") -> Folds:
     """The folds of `points`, a reconstruction (n, 3) of `dec` on `base` (the stored one when None)."""
-    from ._checks import as_points, finite_result
+    from ._checks import as_points
     from .multiscale import _base_array, _check_decomposition
     _check_decomposition(dec)
     ref = reference_for(dec, fold_reference)
-    p = as_points(points, "points")
-    if p.shape[0] != dec.n_points:
+    p = as_points(points, "points")  # its count the core checks (validation.h)
+    if dec._mirror is not None and p.shape[0] != dec.n_points:  # the half's, which only this package knows
         raise ValueError(f"points must have the decomposition's {dec.n_points} points, got {p.shape[0]}")
-    finite_result(p, "points")
     kind = _core.find_folds(dec._model, ref, dec._full(p), base=_base_array(dec, base))
     return _of_half(dec, Folds(kind=kind, before=kind.copy(), limiter=np.ones(len(kind))))
 
