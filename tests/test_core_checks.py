@@ -209,3 +209,11 @@ def test_parts_rows_are_checked_by_the_core():
     labels = np.zeros(len(GOOD), np.int32)
     assert "k must be at least 1" in message(lambda: _core.knn_within_parts(GOOD, labels, k=0))
     assert "part label out of range" in message(lambda: _core.knn_within_parts(GOOD, labels - 1, k=4))
+
+
+def test_decimation_checks_its_input_in_the_core():
+    for target, fragment in [(10**6, "target (1000000) exceeds the number of points (3000)"),
+                             (0, "target must be >= 1, got 0")]:
+        same_message(lambda: ps.decimate(GOOD, target), lambda: _core.decimate(GOOD, target, 0.05), fragment)
+    same_message(lambda: ps.decimate(GOOD, 100, max_variation=-1.0), lambda: _core.decimate(GOOD, 100, -1.0),
+                 "max_variation must be > 0")

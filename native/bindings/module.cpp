@@ -355,9 +355,10 @@ PYBIND11_MODULE(_core, m) {
   }, py::arg("points"), py::arg("onto"), py::arg("kernel"), py::arg("neighbors"), py::arg("self"),
      py::arg("estimate"), py::arg("progress") = py::none(), py::arg("threads") = 0);
 
-  m.def("decimate", [](const DoubleArray& points, std::size_t target, double max_variation, int threads) {
+  m.def("decimate", [](const DoubleArray& points, long long target, double max_variation, int threads) {
     Points p = to_points(points);
-    Clustering c = without_gil(threads, [&] { return cluster_decimate(p, target, max_variation); });
+    check_decimation(p, target, max_variation);  // before target becomes a size
+    Clustering c = without_gil(threads, [&] { return cluster_decimate(p, static_cast<std::size_t>(target), max_variation); });
     return py::make_tuple(c.centroids, to_array(c.labels));
   }, py::arg("points"), py::arg("target"), py::arg("max_variation"), py::arg("threads") = 0);
 

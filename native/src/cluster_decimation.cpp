@@ -1,4 +1,5 @@
 #include "pointscale/cluster_decimation.h"
+#include "pointscale/validation.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -218,6 +219,7 @@ class BestFirst {
 
 Clustering cluster_decimate(const Points& points, std::size_t target, double max_variation,
                             const IndexList* read_order, const Points* side_normals) {
+  check_decimation(points, static_cast<long long>(std::min<std::size_t>(target, 1ull << 62)), max_variation);
   const std::size_t n = static_cast<std::size_t>(points.rows());
   target = std::max<std::size_t>(1, std::min(target, n));
   if (n == 0) return Clustering{};

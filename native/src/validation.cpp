@@ -170,6 +170,15 @@ void check_rays(const PointsRef& origins, const PointsRef& directions) {
   if (((directions.rowwise().norm().array() - 1.0).abs() >= 1e-6).any()) fail("directions must be unit vectors");
 }
 
+void check_decimation(const PointsRef& points, long long target, double max_variation) {
+  check_points(points);
+  if (target < 1) fail(format("target must be >= 1, got %lld", target));
+  if (target > points.rows())
+    fail(format("target (%lld) exceeds the number of points (%lld)", target, static_cast<long long>(points.rows())));
+  check_positive(max_variation, "max_variation");
+  check_extent(points, "points", false);
+}
+
 void check_kernel(double kernel, const char* name) {
   if (!(kernel >= min_kernel && kernel <= max_kernel))
     fail(format("%s must be in [%g, %g] (a multiple of the local spacing), got %s", name, min_kernel, max_kernel,

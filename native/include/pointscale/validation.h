@@ -78,6 +78,10 @@ void check_near_support(const IndexList& near, Eigen::Index points, Eigen::Index
 // directions  #R by 3 unit vectors
 void check_rays(const PointsRef& origins, const PointsRef& directions);
 
+// The input of cluster_decimate: points #P by 3 (finite, within max_extent), target in
+// [1, #P], max_variation > 0.
+void check_decimation(const PointsRef& points, long long target, double max_variation);
+
 // A kernel width as a multiple of the local spacing, in [min_kernel, max_kernel].
 void check_kernel(double kernel, const char* name = "kernel");
 

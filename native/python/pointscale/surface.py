@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _core
-from ._checks import (as_callback, as_points, centre, finite_result, mls_options, number, positive, require_extent,
+from ._checks import (as_callback, as_points, centre, finite_result, mls_options, number,
                       require_near, require_surface, thread_option)
 
 
@@ -92,12 +92,8 @@ def decimate(points, target: int, *, max_variation: float = 0.05):
     Returns (centroids (target, 3), labels (n,) int32 cluster of each point). Clusters of
     identical points cannot be split, so duplicates may leave fewer clusters than asked.
     """
-    p = as_points(points)
-    target = positive(target, "target", integer=True)
-    if target > len(p):
-        raise ValueError(f"target ({target}) exceeds the number of points ({len(p)})")
-    max_variation = positive(max_variation, "max_variation")
-    require_extent(p, minimum=False)
+    p = as_points(points)  # the core checks the rest
+    target, max_variation = number(target, "target", integer=True), number(max_variation, "max_variation")
     origin = centre(p)
     c, labels = _core.decimate(p - origin, target=target, max_variation=max_variation)
     return finite_result(c + origin, "the centroids"), labels
