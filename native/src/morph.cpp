@@ -2,6 +2,7 @@
 #include "pointscale/validation.h"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "pointscale/parallel.h"
 #include "pointscale/detail/plane_fit.h"
@@ -12,6 +13,10 @@
 namespace pointscale {
 
 Eigen::VectorXd knn_interpolate(const Points& from, const Eigen::VectorXd& values, const Points& to, int k) {
+  check_points(from, "from");
+  check_points(to, "to");
+  if (values.size() != from.rows()) throw std::invalid_argument("values must hold one value per point of from");
+  check_neighbors(k, 1, "k");
   const SpatialIndex index(from);
   k = std::min<int>(k, index.size());
   Eigen::VectorXd out(to.rows());

@@ -20,6 +20,7 @@ struct Clustering {
 // side_normals #P by 3 oriented normals, or nullptr. With them, a cluster whose normals disagree
 //             (both sides of a wall thinner than it) is first split by the side its points face,
 //             so that no cluster, and no centroid, straddles a thin sheet.
+// Throws std::invalid_argument for what check_decimation (validation.h) refuses.
 Clustering cluster_decimate(const Points& points, std::size_t target, double max_variation = 0.05,
                             const IndexList* read_order = nullptr, const Points* side_normals = nullptr);
 

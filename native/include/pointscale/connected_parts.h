@@ -19,7 +19,8 @@ Parts connected_parts(const Points& points, const IndexList& pairs);
 
 // For every point, its k nearest points of its own part, itself first: #P by k row-major. A
 // part of fewer than k points fills the rest of each of its rows with the point itself.
-// points  #P by 3; parts  #P labels in [0, count)
+// points  #P by 3; parts  #P labels in [0, count); throws std::invalid_argument otherwise,
+// or for k < 1
 IndexList knn_within_parts(const Points& points, const IndexList& parts, int k);
 
 }  // namespace pointscale

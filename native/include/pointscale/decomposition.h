@@ -56,6 +56,7 @@ struct MultiscaleModel {
 // plane until p^l - p^{l-1} lies exactly along n^{l-1}(P^{l-1}). The move is tiny (the
 // projection is already almost orthogonal) and makes unedited reconstruction exact.
 // points is taken by value: it becomes the finest level, so a caller that moves it in saves a copy.
+// Throws std::invalid_argument for input that check_decompose_input (validation.h) refuses.
 MultiscaleModel decompose(Points points, const Points* input_normals, const DecomposeOptions& options,
                           const ProgressCallback* progress = nullptr);
 

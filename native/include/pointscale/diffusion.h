@@ -24,7 +24,8 @@ double taubin_mu(double lambda, double pass_band = 0.1);
 Points diffuse(const Points& points, const IndexList& neighborhoods, int k, const DiffusionOptions& options,
                const ProgressStage& stage = {});
 
-// The same, computing the cached neighbourhoods first (K = options.neighbors).
+// The same, computing the cached neighbourhoods first (K = options.neighbors). Throws
+// std::invalid_argument for options or points that validation.h refuses.
 Points diffuse(const Points& points, const DiffusionOptions& options, const ProgressStage& stage = {});
 
 }  // namespace pointscale

@@ -19,6 +19,8 @@ struct EncodeOptions {
 // Returns a one-band MultiscaleModel: P^0 on the base's MLS surface, D^0 the normal offsets,
 // made consistent with the normals that reconstruction recomputes. reports[0].pinned counts the
 // points left inconsistent (see align_offsets), consistency_residual their largest error.
+// Throws std::invalid_argument for options, points, base or base_normals that validation.h
+// refuses (messages call the base base_points, as the package does).
 MultiscaleModel encode_onto(const Points& points, const Points& base, const Points* base_normals,
                             const EncodeOptions& options, const ProgressCallback* progress = nullptr);
 

@@ -74,7 +74,8 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input);
 //         centring does not matter)
 // result  #P by 3
 // kind    receives #P FoldKind bits
-// Returns the number of points that fold.
+// Returns the number of points that fold. Throws std::invalid_argument for what
+// check_folds_input (validation.h) refuses; limit_folds also for options out of range.
 std::size_t find_folds(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
                        Eigen::Ref<const Points> result, std::vector<std::uint8_t>& kind);
 

@@ -44,8 +44,9 @@ struct MlsResult {
 // x        #X by 3 points to project
 // support  spatial index on the #S support points that define the surface
 // h        #S kernel widths, one per support point (weights exp(-r^2/h_j^2))
-// Throws std::invalid_argument when options.order or options.near_support is given with a
-// size other than #X.
+// Throws std::invalid_argument for options out of range (validate, validation.h), points that
+// are not finite, or options.order, options.near_support or options.support_normals of
+// another size than #X (#S for the normals).
 MlsResult mls_project(const Points& x, const SpatialIndex& support, const Eigen::VectorXd& h,
                       const MlsOptions& options, const ProgressStage& stage = {});
 

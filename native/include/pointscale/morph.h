@@ -10,7 +10,8 @@ namespace pointscale {
 // from    #F by 3 points carrying the values; values #F
 // to      #T by 3 query points; each takes the weighted mean over its k nearest `from` points,
 //         with the kernel width set by the k-th neighbour distance (exact at coincident points)
-// Returns #T values.
+// Returns #T values. Throws std::invalid_argument for points that are not finite, values of
+// another size than #F, or k outside [1, max_neighbors].
 Eigen::VectorXd knn_interpolate(const Points& from, const Eigen::VectorXd& values, const Points& to, int k);
 
 struct MorphOptions {
@@ -30,6 +31,8 @@ struct MorphModel {
 
 // a  #A by 3, b  #B by 3 (the point counts may differ); base  #S by 3 samples of the common base;
 // base_normals  #S by 3 or nullptr (then oriented outward by propagation).
+// Throws std::invalid_argument for input that validation.h refuses (messages name the models
+// points_a and points_b and the base base_points, as the package does).
 MorphModel morph(const Points& a, const Points& b, const Points& base, const Points* base_normals,
                  const MorphOptions& options, const ProgressCallback* progress = nullptr);
 

@@ -18,7 +18,8 @@ constexpr int orientation_width = 12;
 // Returns #P by 3 unit normals in the input's numbering (zero rows where no plane fits),
 // outward on closed shapes. The work runs on the points renumbered in Z-order, so that it
 // reads memory in order whatever order they come in, and gives the same normals for any
-// order of the same points (up to neighbours at equal distances).
+// order of the same points (up to neighbours at equal distances). Throws std::invalid_argument
+// for what check_normal_estimation (validation.h) refuses, or a width outside [1, k].
 Points oriented_normals(Points&& points, int k, int width);
 
 }  // namespace pointscale

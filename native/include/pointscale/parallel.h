@@ -16,7 +16,7 @@ namespace pointscale {
 // count of the call that started them, so work nested inside a loop keeps to it too.
 class ThreadCountScope {
  public:
-  explicit ThreadCountScope(int threads);  // std::invalid_argument when threads < 0
+  explicit ThreadCountScope(int threads);  // std::invalid_argument outside 0..max_threads (check_threads, validation.h)
   ~ThreadCountScope();
   ThreadCountScope(const ThreadCountScope&) = delete;
   ThreadCountScope& operator=(const ThreadCountScope&) = delete;

@@ -33,6 +33,7 @@ struct RayHits {
 // directions  #R by 3 unit directions; the ray is the whole line o + t d, t of either sign
 // support     spatial index on the #S points defining the MLS surface
 // h           #S kernel widths
+// Throws std::invalid_argument for bad options or rays (validate, check_rays: validation.h).
 RayHits shoot_rays(const Points& origins, const Points& directions, const SpatialIndex& support,
                    const Eigen::VectorXd& h, const RayOptions& options, const ProgressStage& stage = {});
 
@@ -48,7 +49,8 @@ struct RayshootReport {
 // itself with fine_kernel x its spacing, narrow so that it stays close to the samples). So P^k
 // resamples the input surface, and reconstruction
 // rebuilds P^k exactly. A ray that misses falls back to the orthogonal projection of its
-// origin onto S^l, measured along the normal; it is counted in `report`.
+// origin onto S^l, measured along the normal; it is counted in `report`. Checks its input as
+// decompose does, and the rays' options and fine_kernel (validation.h).
 MultiscaleModel decompose_rayshoot(const Points& points, const Points* input_normals, const DecomposeOptions& options,
                                    const DiffusionOptions* diffusion, const RayOptions& rays, double fine_kernel,
                                    RayshootReport& report, const ProgressCallback* progress = nullptr);

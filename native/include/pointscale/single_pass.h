@@ -27,6 +27,7 @@ struct SinglePassResult {
 // kernel   kernel width as a multiple of the local spacing (local_spacing(support, 6))
 // k        support points in each plane fit
 // estimate  fill next_step too (what the report asks for)
+// Throws std::invalid_argument for a kernel, k or points that validation.h refuses.
 // Each step is relative to h of the support point nearest to where its fit is made, as the
 // iteration's tolerance measures it.
 SinglePassResult mls_single_pass(const Points& x, bool self, const SpatialIndex& support, double kernel, int k,
