@@ -105,19 +105,17 @@ def _exact_base(dec):
     return exact, _exact_bases[id(dec)][2]
 
 
-def rebuild(ps, dec, base: np.ndarray, gains=None, prevent_folds: bool = False):
+def rebuild(solver, dec, base: np.ndarray, gains=None, prevent_folds: bool = False):
     """Full detail on an edited base P^0, each level's normals turned with the base (Sec. 8.1):
-    (points, the Folds of the result)."""
-    return ps.reconstruct(dec, gains=gains, base=edited_base(dec, base),
-                          folds="prevent" if prevent_folds else "report")
+    (points, the Folds of the result). solver: the pointscale.Reconstructor of dec."""
+    return solver.reconstruct(gains, edited_base(dec, base), folds="prevent" if prevent_folds else "report")
 
 
-def bake(ps, dec, base: np.ndarray, band_values, mask_weights, prevent_folds: bool = False):
+def bake(solver, dec, base: np.ndarray, band_values, mask_weights, prevent_folds: bool = False):
     """Exact recursive reconstruction of the current band gains (with painted masks):
-    (points, the Folds of the result)."""
+    (points, the Folds of the result). solver: the pointscale.Reconstructor of dec."""
     gains = logic.per_point_gains(band_values, mask_weights, dec.n_points)
-    return ps.reconstruct(dec, gains=gains, base=edited_base(dec, base),
-                          folds="prevent" if prevent_folds else "report")
+    return solver.reconstruct(gains, edited_base(dec, base), folds="prevent" if prevent_folds else "report")
 
 
 def morph_keys(ps, a: np.ndarray, b: np.ndarray, base_points: np.ndarray | None = None, samples: int = 40000,

@@ -10,6 +10,11 @@ import numpy as np
 from . import group_weights, keys, logic, mesh_io, preferences, recipe, storage
 
 _cache: dict = {}
+# A Reconstructor per decomposition that Rebuild Detail or Bake Filter used last, under the same
+# keys: reconstruct() keeps nothing between calls, and the solver finds what an edited base
+# needs once and keeps each level's grouping. It copies the model, so only the last two.
+_solvers: dict = {}
+_SOLVERS_KEPT = 2
 
 
 @dataclass
@@ -151,14 +156,36 @@ def decomposition(mesh, ps):
     return dec
 
 
+def reconstructor(mesh, ps):
+    """The Reconstructor of ``mesh``'s engine object (decomposition()), made on first use and
+    kept while that object is."""
+    token = mesh[storage.PROP].get("token", "") if storage.has_data(mesh) else ""
+    key = (mesh.session_uid, token)
+    dec = decomposition(mesh, ps)
+    held = _solvers.get(key)
+    if held is not None and held[0] is dec:
+        return held[1]
+    _solvers.pop(key, None)
+    while len(_solvers) >= _SOLVERS_KEPT:
+        _solvers.pop(next(iter(_solvers)))
+    solver = ps.Reconstructor(dec)
+    _solvers[key] = (dec, solver)
+    return solver
+
+
 def _remember(mesh, token, dec) -> None:
     if len(_cache) >= 4:
-        _cache.pop(next(iter(_cache)))
-    _cache[(mesh.session_uid, token)] = dec
+        gone = next(iter(_cache))
+        _cache.pop(gone)
+        _solvers.pop(gone, None)
+    key = (mesh.session_uid, token)
+    _cache[key] = dec
+    _solvers.pop(key, None)  # made for the engine object this one replaces
 
 
 def forget_all() -> None:
     _cache.clear()
+    _solvers.clear()
 
 
 def show_result(obj, name: str, co: np.ndarray) -> None:

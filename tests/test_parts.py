@@ -127,6 +127,10 @@ def test_editing_one_part_leaves_the_other_as_it_was(decomposed):
         assert np.abs(out[other] - unedited[other]).max() < 1e-9 * diag, name
         assert np.abs(out[sel] - unedited[sel]).max() > 1e-3 * diag  # the edit did something
         assert np.abs(ps.Reconstructor(dec).reconstruct(None, edited) - out).max() == 0.0
+        # A solver that met the unedited base first finds the rings, parts kept apart, then.
+        solver = ps.Reconstructor(dec)
+        assert np.array_equal(solver.reconstruct(), unedited)
+        assert np.array_equal(solver.reconstruct(None, edited), out)
 
 
 def test_without_connectivity_the_parts_blend(decomposed):

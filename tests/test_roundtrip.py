@@ -71,6 +71,31 @@ def test_the_reconstructor_gives_reconstruct_bit_for_bit(case):
         assert np.array_equal(solver.reconstruct(**kwargs), ps.reconstruct(dec, **kwargs)), kwargs
 
 
+def test_reconstruct_keeps_nothing_between_calls(case):
+    # A result must not depend on the calls before it: the same calls on a copy of the model
+    # made afresh, in another order, give the same points bit for bit.
+    points, dec = case
+    wave = dec.base + 0.05 * diagonal(points) * np.sin(dec.base[:, [1, 2, 0]] * 3.0)
+    lift = dec.base + 0.02 * diagonal(points) * np.cos(dec.base[:, [2, 0, 1]] * 2.0)
+    calls = [dict(base=wave), dict(gains=[1.0, 2.0, 0.5], base=wave), dict(gains=[1.0, 2.0, 0.5], base=lift),
+             dict(), dict(gains=[0.0, 1.0, 1.0])]
+    first = [ps.reconstruct(dec, **kwargs) for kwargs in calls]
+    copy = ps.Decomposition.from_dict(dec.to_dict())
+    for i in reversed(range(len(calls))):
+        assert np.array_equal(ps.reconstruct(copy, **calls[i]), first[i]), calls[i]
+
+
+def test_a_reconstructor_finds_the_edit_support_on_its_first_edited_call(case):
+    # Unedited calls first (Bake Filter's order), then edits: the support it finds then, in its
+    # own point order, must be the one reconstruct() finds.
+    points, dec = case
+    solver = ps.Reconstructor(dec)
+    assert np.array_equal(solver.reconstruct([2.0, 1.0, 1.0]), ps.reconstruct(dec, [2.0, 1.0, 1.0]))
+    wave = dec.base + 0.05 * diagonal(points) * np.sin(dec.base[:, [1, 2, 0]] * 3.0)
+    for gains in ([2.0, 1.0, 1.0], None, [2.0, 1.0, 1.0]):
+        assert np.array_equal(solver.reconstruct(gains, wave), ps.reconstruct(dec, gains, wave)), gains
+
+
 def test_zero_gains_give_the_base(case):
     points, dec = case
     assert np.array_equal(ps.reconstruct(dec, gains=np.zeros(3)), dec.base)

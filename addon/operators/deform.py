@@ -70,7 +70,8 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
         try:
             dec = writeback.decomposition(mesh, ps)
             base = mesh_io.read_key(keys.get(mesh, keys.level_name(0)))
-            result, folds = compute.rebuild(ps, dec, base, prevent_folds=mesh.multiscale.prevent_folds)
+            solver = writeback.reconstructor(mesh, ps)
+            result, folds = compute.rebuild(solver, dec, base, prevent_folds=mesh.multiscale.prevent_folds)
         except ValueError as exc:
             self.report({"ERROR"}, f"Rebuild detail: {exc}")
             return {"CANCELLED"}
@@ -105,7 +106,9 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
             base = mesh_io.read_key(keys.get(mesh, keys.level_name(0)))
             values = keys.band_values(mesh, k)
             weights = group_weights.read(obj, keys.band_masks(obj, k), len(mesh.vertices))
-            result, folds = compute.bake(ps, dec, base, values, weights, prevent_folds=mesh.multiscale.prevent_folds)
+            solver = writeback.reconstructor(mesh, ps)
+            result, folds = compute.bake(solver, dec, base, values, weights,
+                                         prevent_folds=mesh.multiscale.prevent_folds)
         except ValueError as exc:
             self.report({"ERROR"}, f"Bake filter: {exc}")
             return {"CANCELLED"}

@@ -133,13 +133,6 @@ MultiscaleModel model_from_arrays(const py::dict& d) {
   return m;
 }
 
-// A decomposition's reconstruction storage, kept between reconstruct() calls (the pointscale
-// package keeps one beside each model). A call that finds it in use works without it.
-struct ReconstructionBuffers {
-  std::mutex busy;
-  ReconstructionWorkspace workspace;
-};
-
 }  // namespace
 
 void bind_options(py::module_& m);    // options.cpp
@@ -171,20 +164,16 @@ PYBIND11_MODULE(_core, m) {
       // origin: the decomposition's origin, or None. Given, `base` comes in world coordinates
       // and the points go out in them (one pass each way fewer than doing it in NumPy).
       .def("reconstruct", [](const MultiscaleModel& s, const DoubleArray& gains, py::object base, bool keep_levels,
-                             int upto, py::object progress, py::object origin, py::object buffers, int threads) {
+                             int upto, py::object progress, py::object origin, int threads) {
         const Eigen::MatrixXd g = to_gains(gains);  // checked by the core (validation.h)
         Points edited;
         const bool has_base = !base.is_none();
         const Vec3 o = to_origin(origin);
         if (has_base) edited = to_points_centred(base.cast<DoubleArray>(), o);
         PythonProgress p(progress);
-        ReconstructionBuffers* kept = buffers.is_none() ? nullptr : buffers.cast<ReconstructionBuffers*>();
         Reconstruction r = without_gil(threads, [&] {
-          std::unique_lock<std::mutex> lock;
-          if (kept) lock = std::unique_lock<std::mutex>(kept->busy, std::try_to_lock);
-          ReconstructionWorkspace* ws = lock.owns_lock() ? &kept->workspace : nullptr;
-          Reconstruction out = has_base ? reconstruct_from_base(s, g, std::move(edited), keep_levels, upto, p.get(), ws)
-                                        : reconstruct(s, g, nullptr, keep_levels, upto, p.get(), ws);
+          Reconstruction out = has_base ? reconstruct_from_base(s, g, std::move(edited), keep_levels, upto, p.get())
+                                        : reconstruct(s, g, nullptr, keep_levels, upto, p.get());
           if (!origin.is_none()) {
             out.positions.rowwise() += o.transpose();
             for (Points& level : out.levels) level.rowwise() += o.transpose();
@@ -199,12 +188,7 @@ PYBIND11_MODULE(_core, m) {
         for (Points& level_normals : r.normals) normals.append(py::cast(std::move(level_normals)));
         return py::object(py::make_tuple(levels, normals));
       }, py::arg("gains"), py::arg("base") = py::none(), py::arg("keep_levels") = false, py::arg("upto") = -1,
-         py::arg("progress") = py::none(), py::arg("origin") = py::none(), py::arg("buffers") = py::none(),
-         py::arg("threads") = 0);
-
-  py::class_<ReconstructionBuffers>(m, "ReconstructionBuffers",
-                                    "Storage that Model.reconstruct reuses from call to call (two (n, 3) arrays).")
-      .def(py::init<>());
+         py::arg("progress") = py::none(), py::arg("origin") = py::none(), py::arg("threads") = 0);
 
   // The solver for repeated reconstructions (reconstructor.h), which checks its arguments.
   py::class_<Reconstructor>(m, "Reconstructor")

@@ -3,16 +3,58 @@
 
 #include <algorithm>
 #include <utility>
+#include <vector>
 
 #include "pointscale/cluster_decimation.h"
+#include "pointscale/parallel.h"
 #include "pointscale/sample_spacing.h"
-#include "pointscale/detail/align_offsets.h"
+#include "pointscale/detail/align_level.h"
 #include "pointscale/detail/base_normals.h"
 #include "pointscale/detail/build_level_support.h"
 #include "pointscale/detail/project_from_afar.h"
 #include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
+
+namespace {
+
+struct Alignment {
+  int iterations = 0;
+  std::size_t kept = 0;    // points left where they were: no consistent position within reach
+  double residual = 0.0;   // largest tangential part of fine - level left, in coordinates
+};
+
+// Makes fine - level lie along the level's recomputed normals: the level aligner (align_level.h)
+// with encode's policy, which keeps a point whose consistent position is out of reach where it
+// was and steps every slide back onto the base's MLS surface (base, h), so the level stays on
+// it. reference #P by 3 orients the normals; normals receives the aligned level's (#P by 3),
+// which the last step leaves as they are, since they depend on the anchors alone.
+Alignment align_onto_base(const Points& fine, Points& level, const LevelSupport& support, const Points& reference,
+                          int max_iterations, double stop, const ProgressStage& stage, const SpatialIndex& base,
+                          const Eigen::VectorXd& h, int neighbors, Points& normals) {
+  Points anchor_reference(support.clusters, 3);
+  for (Index c = 0; c < support.clusters; ++c) anchor_reference.row(c) = reference.row(support.anchors[c]);
+  LevelAligner aligner(fine, level, support, encode_alignment(base, h, neighbors));
+  const AnchorAlignment anchors = aligner.align_anchors(anchor_reference, stop, max_iterations, stage);
+  normals = level_normals(level, support, reference);
+  Alignment out;
+  out.iterations = anchors.iterations;
+  out.kept = anchors.frozen + aligner.align_others(normals);
+  std::vector<double> left(static_cast<std::size_t>(level.rows()), 0.0);
+  parallel_for(left.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t ii = b; ii < e; ++ii) {
+      const Eigen::Index i = static_cast<Eigen::Index>(ii);
+      const Vec3 nrm = normals.row(i).transpose();
+      const Vec3 d = (fine.row(i) - level.row(i)).transpose();
+      left[ii] = (d - d.dot(nrm) * nrm).norm();
+    }
+  });
+  out.residual = *std::max_element(left.begin(), left.end());
+  stage.report(1.0);
+  return out;
+}
+
+}  // namespace
 
 MultiscaleModel encode_onto(const Points& points, const Points& base, const Points* base_normals,
                             const EncodeOptions& options, const ProgressCallback* progress) {
@@ -45,12 +87,13 @@ MultiscaleModel encode_onto(const Points& points, const Points& base, const Poin
   // Orientation from the base: its given normals, else outward by propagation over the base.
   const Points reference = nearest_normals(level, base_index, base_normals ? *base_normals : oriented_normals(base_index));
 
-  const Alignment aligned = align_offsets(points, level, support, reference, options.consistency_iterations,
-                                         1e-12 * scale, all.sub(0.6, 0.95), &base_index, &h, options.mls.neighbors);
-  const Points normals = level_normals(level, support, reference);
+  Points normals;
+  const Alignment aligned = align_onto_base(points, level, support, reference, options.consistency_iterations,
+                                            1e-12 * scale, all.sub(0.6, 0.95), base_index, h, options.mls.neighbors,
+                                            normals);
   model.details.resize(1, n);
   for (Eigen::Index i = 0; i < n; ++i) model.details(0, i) = (points.row(i) - level.row(i)).dot(normals.row(i));
-  model.base_normals = normals;
+  model.base_normals = std::move(normals);
   model.base = std::move(level);
   LevelReport report;
   report.support_points = static_cast<std::size_t>(support.clusters);

@@ -12,13 +12,11 @@ namespace pointscale {
 
 EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p,
                                                bool edited, Reconstruction* kept, int upto,
-                                               const ProgressCallback* progress, ReconstructionWorkspace* workspace) {
+                                               const ProgressCallback* progress, ReconstructionWorkspace& ws) {
   const int k = model.bands();
   if (upto < 0 || upto > k) upto = k;
   const bool per_point = gains.cols() > 1;
   const ProgressStage all{progress, 0.0, 1.0};
-  ReconstructionWorkspace own;
-  ReconstructionWorkspace& ws = workspace ? *workspace : own;
   EditRotationReport report;
   // An edited base: each point's turn, and the levels of the stored base built beside the
   // edited ones. Their normals, turned, are the edited levels' normals; with nothing edited
@@ -26,13 +24,12 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   const bool turned = edited && upto > 0;
   if (turned) {
     const std::vector<Mat3> clusters = transported_rotations(model.base, p, model.support[0]);
-    if (ws.edit.feet.size() != static_cast<std::size_t>(p.rows())) ws.edit = edit_support(model);
     edit_rotations(model.base, p, ws.edit.rings, ws.edit.ring_size, clusters, model.support[0].labels,
                    &ws.edit.planes, ws.rotation, &report);
   }
   Points& fitted = turned ? ws.unedited : p;  // the level each level's normals are fitted to
   // Normals fitted once for these gains are reused (they do not depend on the edit).
-  const bool cache = turned && workspace;
+  const bool cache = turned && ws.kept;
   const bool cached = cache && ws.unedited_normals.size() >= static_cast<std::size_t>(upto) &&
                       ws.unedited_gains.rows() == gains.rows() && ws.unedited_gains.cols() == gains.cols() &&
                       (ws.unedited_gains.array() == gains.array()).all();
@@ -57,7 +54,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
       Points& into = cache ? ws.unedited_normals[static_cast<std::size_t>(l)]
                            : previous == &ws.normals[0] ? ws.normals[1] : ws.normals[0];
       const LabelGroups* groups = static_cast<std::size_t>(l) < ws.groups.size() ? &ws.groups[l] : nullptr;
-      level_normals(fitted, s, *previous, stage, into, groups, workspace ? &ws.centroids : nullptr);
+      level_normals(fitted, s, *previous, stage, into, groups, ws.kept ? &ws.centroids : nullptr);
       normals = &into;
     }
     const Points& nrm = *normals;
@@ -87,22 +84,28 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   return report;
 }
 
-EditSupport edit_support(const MultiscaleModel& model) {
+EditSupport edit_support(const Points& base, const IndexList& parts, const Points& base_normals, const Points& finest) {
   EditSupport edit;
-  edit.rings = base_rings(model.base, model.parts);
-  edit.ring_size = ring_size_for(model.base.rows());
-  edit.planes = ring_planes(model.base, edit.rings, edit.ring_size);
-  const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
-  const Points finest = reconstruct(model, ones, nullptr, false).positions;
-  edit.feet = base_feet(model.base, model.base_normals, finest, edit.rings, edit.ring_size);
+  edit.rings = base_rings(base, parts);
+  edit.ring_size = ring_size_for(base.rows());
+  edit.planes = ring_planes(base, edit.rings, edit.ring_size);
+  edit.feet = base_feet(base, base_normals, finest, edit.rings, edit.ring_size);
   return edit;
 }
 
 namespace {
 
 Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points p, bool edited,
-                                  bool keep_levels, int upto, const ProgressCallback* progress,
-                                  ReconstructionWorkspace* workspace) {
+                                  bool keep_levels, int upto, const ProgressCallback* progress) {
+  // A base handed back unchanged turns no detail: the unedited path gives the same points bit
+  // for bit, without finding the edit support.
+  if (edited && p.rows() == model.base.rows() && p == model.base) edited = false;
+  ReconstructionWorkspace workspace;
+  if (edited && upto != 0 && model.bands() > 0) {
+    const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
+    const Points finest = reconstruct_levels(model, ones, model.base, false, false, -1, nullptr).positions;
+    workspace.edit = edit_support(model.base, model.parts, model.base_normals, finest);
+  }
   Reconstruction out;
   out.edit = reconstruct_levels_in_place(model, gains, p, edited, keep_levels ? &out : nullptr, upto, progress,
                                          workspace);
@@ -113,19 +116,17 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
 }  // namespace
 
 Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
-                           bool keep_levels, int upto, const ProgressCallback* progress,
-                           ReconstructionWorkspace* workspace) {
+                           bool keep_levels, int upto, const ProgressCallback* progress) {
   check_gains(gains, model.bands(), model.base.rows());
-  if (base) return reconstruct_from_base(model, gains, *base, keep_levels, upto, progress, workspace);
-  return reconstruct_levels(model, gains, model.base, false, keep_levels, upto, progress, workspace);
+  if (base) return reconstruct_from_base(model, gains, *base, keep_levels, upto, progress);
+  return reconstruct_levels(model, gains, model.base, false, keep_levels, upto, progress);
 }
 
 Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points base,
-                                     bool keep_levels, int upto, const ProgressCallback* progress,
-                                     ReconstructionWorkspace* workspace) {
+                                     bool keep_levels, int upto, const ProgressCallback* progress) {
   check_gains(gains, model.bands(), model.base.rows());
   check_base(base, model.base.rows(), Vec3::Zero());
-  return reconstruct_levels(model, gains, std::move(base), true, keep_levels, upto, progress, workspace);
+  return reconstruct_levels(model, gains, std::move(base), true, keep_levels, upto, progress);
 }
 
 }  // namespace pointscale

@@ -10,8 +10,43 @@
 
 namespace pointscale {
 
-Reconstructor::Reconstructor(const MultiscaleModel& model) {
+struct Reconstructor::State {
+  MultiscaleModel model;  // reordered: row r (column r of details) is point order[r]
+  IndexList order;        // #P
+  IndexList parts;        // the model's part labels in its own numbering, or empty
+  ReconstructionWorkspace workspace;
+  Points level;           // the level being built, reordered
+  Eigen::MatrixXd gains;  // per-point gains, reordered
+
+  // What an edit needs (EditSupport), found in the model's own numbering, so that rings with
+  // neighbours at equal distances list them as reconstruct() does, then renumbered.
+  void find_edit_support();
+};
+
+namespace {
+
+// rows[order[r]] = reordered[r]: a reordered array back in the model's own numbering.
+Points in_model_order(const Points& reordered, const IndexList& order) {
+  Points out(reordered.rows(), 3);
+  parallel_for(order.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t r = b; r < e; ++r) out.row(order[r]) = reordered.row(static_cast<Eigen::Index>(r));
+  }, {}, 4096);
+  return out;
+}
+
+}  // namespace
+
+Reconstructor::~Reconstructor() = default;
+Eigen::Index Reconstructor::points() const { return state_->model.base.rows(); }
+int Reconstructor::bands() const { return state_->model.bands(); }
+
+Reconstructor::Reconstructor(const MultiscaleModel& model) : state_(std::make_unique<State>()) {
   validate(model);
+  MultiscaleModel& model_ = state_->model;
+  IndexList& order_ = state_->order;
+  ReconstructionWorkspace& workspace_ = state_->workspace;
+  workspace_.kept = true;
+  state_->parts = model.parts;
   const Eigen::Index n = model.base.rows();
   const int k = model.bands();
   // Level 0's layout (cluster_layout.h): a spatial order, so level 0's fits read and write
@@ -35,28 +70,6 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) {
       model_.details.col(row) = model.details.col(i);
     }
   }, {}, 4096);
-
-  // What an edit needs, found in the model's own numbering (so that rings with neighbours at
-  // equal distances list them as reconstruct() does), then renumbered.
-  {
-    const EditSupport from = edit_support(model);
-    EditSupport& to = workspace_.edit;
-    const std::size_t ring = static_cast<std::size_t>(from.ring_size);
-    to.ring_size = from.ring_size;
-    to.rings.resize(from.rings.size());
-    to.feet.resize(from.feet.size());
-    to.planes.normals.resize(from.planes.normals.size());
-    to.planes.kind.resize(from.planes.kind.size());
-    parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-      for (std::size_t r = b; r < e; ++r) {
-        const std::size_t i = static_cast<std::size_t>(order_[r]);
-        for (std::size_t j = 0; j < ring; ++j) to.rings[r * ring + j] = rank[from.rings[i * ring + j]];
-        to.feet[r] = rank[from.feet[i]];
-        to.planes.normals[r] = from.planes.normals[i];
-        to.planes.kind[r] = from.planes.kind[i];
-      }
-    }, {}, 4096);
-  }
 
   model_.support.resize(static_cast<std::size_t>(k));
   workspace_.groups.resize(static_cast<std::size_t>(k));
@@ -85,35 +98,69 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) {
   }
 }
 
+void Reconstructor::State::find_edit_support() {
+  const Eigen::Index n = model.base.rows();
+  const IndexList rank = inverse_order(order);
+  // The unedited finest level, as reconstruct() finds it: this model's level loop gives it bit
+  // for bit, in this order.
+  Points finest = model.base;
+  const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
+  reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, nullptr, workspace);
+  const EditSupport from = edit_support(in_model_order(model.base, order), parts,
+                                        in_model_order(model.base_normals, order), in_model_order(finest, order));
+  EditSupport& to = workspace.edit;
+  const std::size_t ring = static_cast<std::size_t>(from.ring_size);
+  to.ring_size = from.ring_size;
+  to.rings.resize(from.rings.size());
+  to.feet.resize(from.feet.size());
+  to.planes.normals.resize(from.planes.normals.size());
+  to.planes.kind.resize(from.planes.kind.size());
+  parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+    for (std::size_t r = b; r < e; ++r) {
+      const std::size_t i = static_cast<std::size_t>(order[r]);
+      for (std::size_t j = 0; j < ring; ++j) to.rings[r * ring + j] = rank[from.rings[i * ring + j]];
+      to.feet[r] = rank[from.feet[i]];
+      to.planes.normals[r] = from.planes.normals[i];
+      to.planes.kind[r] = from.planes.kind[i];
+    }
+  }, {}, 4096);
+}
+
 Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* base, const Vec3& origin,
                                   const ProgressCallback* progress) {
   check_gains(gains, bands(), points());
   if (base) check_base(Eigen::Map<const Points>(base, points(), 3), points(), origin);
   const std::lock_guard<std::mutex> lock(busy_);
+  State& s = *state_;
   const Eigen::Index n = points();
-  const bool edited = base != nullptr;
+  bool edited = base != nullptr;
   if (edited) {
-    level_.resize(n, 3);
+    s.level.resize(n, 3);
     parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
       for (std::size_t r = b; r < e; ++r)
-        for (int a = 0; a < 3; ++a) level_(static_cast<Eigen::Index>(r), a) = base[3 * std::size_t(order_[r]) + a] - origin(a);
+        for (int a = 0; a < 3; ++a)
+          s.level(static_cast<Eigen::Index>(r), a) = base[3 * std::size_t(s.order[r]) + a] - origin(a);
     }, {}, 4096);
+    // A base handed back unchanged turns no detail (as in reconstruct()).
+    edited = s.level != s.model.base;
   } else {
-    level_ = model_.base;
+    s.level = s.model.base;
   }
+  if (edited && s.model.bands() > 0 && s.workspace.edit.feet.size() != static_cast<std::size_t>(n))
+    s.find_edit_support();
   const Eigen::MatrixXd* g = &gains;
   if (gains.cols() > 1) {
-    gains_.resize(gains.rows(), n);
+    s.gains.resize(gains.rows(), n);
     parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-      for (std::size_t r = b; r < e; ++r) gains_.col(static_cast<Eigen::Index>(r)) = gains.col(order_[r]);
+      for (std::size_t r = b; r < e; ++r) s.gains.col(static_cast<Eigen::Index>(r)) = gains.col(s.order[r]);
     }, {}, 4096);
-    g = &gains_;
+    g = &s.gains;
   }
-  reconstruct_levels_in_place(model_, *g, level_, edited, nullptr, -1, progress, &workspace_);
+  reconstruct_levels_in_place(s.model, *g, s.level, edited, nullptr, -1, progress, s.workspace);
   Points out(n, 3);
   const Eigen::RowVector3d shift = origin.transpose();
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-    for (std::size_t r = b; r < e; ++r) out.row(order_[r]) = level_.row(static_cast<Eigen::Index>(r)) + shift;
+    for (std::size_t r = b; r < e; ++r) out.row(s.order[r]) = s.level.row(static_cast<Eigen::Index>(r)) + shift;
   }, {}, 4096);
   return out;
 }

@@ -132,3 +132,32 @@ def test_bake_filter_says_how_many_points_fold_and_prevent_folds_removes_them():
     assert folded() > 20
     assert bpy.ops.pointscale.clear() == {"FINISHED"}
     assert keys.FOLDS not in obj.vertex_groups and keys.FOLDS_MARKED not in me.keys()
+
+
+def test_rebuild_and_bake_share_one_kept_reconstructor():
+    """Rebuild Detail and Bake Filter run on the mesh's pointscale.Reconstructor, kept between
+    calls (reconstruct() keeps nothing), and give what reconstruct() gives."""
+    import pointscale as ps
+
+    writeback = importlib.import_module(h.ADDON_NAME + ".writeback")
+    compute = importlib.import_module(h.ADDON_NAME + ".compute")
+    obj = h.mesh_object(h.noisy_sphere(6000), name="KeptSolver")
+    h.decompose(obj, levels=3)
+    me = obj.data
+    base = h.key(me, "Level 0").astype(np.float64)
+    lifted = base.copy()
+    lifted[:, 2] += bump(base[:, :2], height=0.2, width=0.5)
+    h.set_key(me, "Level 0", lifted)
+
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    solver = writeback.reconstructor(me, ps)
+    dec = writeback.decomposition(me, ps)
+    expected = ps.reconstruct(dec, base=compute.edited_base(dec, h.key(me, "Level 0")))
+    assert np.array_equal(h.key(me, "Multiscale Edit"), expected.astype(np.float32))
+
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    assert writeback.reconstructor(me, ps) is solver
+    assert np.array_equal(h.key(me, "Multiscale Filter"), expected.astype(np.float32))
+
+    writeback.forget_all()  # a new file: the engine object and its solver are made again
+    assert writeback.reconstructor(me, ps) is not solver

@@ -18,7 +18,7 @@ struct EncodeOptions {
 // base_normals  #B by 3 or nullptr: orients the base (else outward by propagation)
 // Returns a one-band MultiscaleModel: P^0 on the base's MLS surface, D^0 the normal offsets,
 // made consistent with the normals that reconstruction recomputes. reports[0].pinned counts the
-// points left inconsistent (see align_offsets), consistency_residual their largest error.
+// points left inconsistent (see detail/align_level.h), consistency_residual their largest error.
 // Throws std::invalid_argument for options, points, base or base_normals that validation.h
 // refuses (messages call the base base_points, as the package does).
 MultiscaleModel encode_onto(const Points& points, const Points& base, const Points* base_normals,

@@ -8,7 +8,6 @@
 
 #include "pointscale/decomposition.h"
 #include "pointscale/edit_rotations.h"
-#include "pointscale/spatial_order.h"
 
 namespace pointscale {
 
@@ -19,43 +18,19 @@ struct Reconstruction {
   EditRotationReport edit;      // how the edit's turns were measured (all zero when unedited)
 };
 
-// What an edited base needs: found once per model, since no edit changes it.
-struct EditSupport {
-  IndexList rings;       // #P by ring_size, base_rings(base, parts)
-  int ring_size = 0;
-  IndexList feet;        // #P, base_feet(base, base_normals, the finest level)
-  EditRingPlanes planes; // ring_planes(base, rings, ring_size)
-};
-
-// What a caller that reconstructs over and over (Reconstructor) keeps between calls.
-struct ReconstructionWorkspace {
-  std::vector<LabelGroups> groups;  // per level: its points grouped like support.local, or empty
-  Points normals[2];                // two levels' normals, alternating
-  Points centroids;                 // a level's anchors
-  EditSupport edit;                 // found on the first edited call
-  std::vector<Mat3> rotation;       // an edited base: each point's turn
-  Points unedited;                  // an edited base: the level as the stored base gives it
-  // An edited base: the stored base's level normals for the gains last used, 1..levels - 1
-  // (level 0's are the model's). They do not depend on the edit, so an editing session that
-  // keeps its gains fits them once.
-  Eigen::MatrixXd unedited_gains;
-  std::vector<Points> unedited_normals;
-};
-
 // gains     k by 1 (per band) or k by #P (per point); band l is scaled by its gain
 // base      #P by 3 edited P^0, or nullptr for the stored one (whose normals are then read from
 //           the model, bit for bit what fitting them again gives)
 // upto      reconstruct levels 0..upto only (upto <= k)
-// workspace storage kept between calls, or nullptr (arrays allocated afresh each call fault
-//           their pages in again on first touch)
+// Stateless: every call finds what an edited base needs afresh (the rings, planes and feet of
+// edit_rotations.h) and allocates its own arrays. A caller that reconstructs one model over
+// and over keeps a Reconstructor (reconstructor.h), the one cache of those.
 Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
-                           bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr,
-                           ReconstructionWorkspace* workspace = nullptr);
+                           bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr);
 
 // The same from an edited base that the caller hands over (no copy of it is made).
 Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points base,
-                                     bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr,
-                                     ReconstructionWorkspace* workspace = nullptr);
+                                     bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr);
 
 // The level loop behind both, shared with Reconstructor: detail/reconstruct_levels.h.
 

@@ -1,9 +1,13 @@
 // Reconstruction from one model over and over, as an editing session runs it (Sec. 8.1): a
-// solver beside the free functions of reconstruction.h. It holds the model in a spatially
-// coherent point order (level 0's clusters one after another), each level's grouping by
-// cluster and the working storage, so that a call costs the fits and little else. Its results
-// are bit for bit those of reconstruct(). It copies the model (about its size again).
+// solver beside the stateless free functions of reconstruction.h, and the one place where
+// anything is kept between reconstructions. It holds the model in a spatially coherent point
+// order (level 0's clusters one after another), each level's grouping by cluster, the working
+// storage, and, from its first edited call on, what an edited base needs (the rings, planes
+// and feet of edit_rotations.h) and the stored base's level normals for the gains last used.
+// So a call costs the fits and little else. Its results are bit for bit those of
+// reconstruct(). It copies the model (about its size again).
 #pragma once
+#include <memory>
 #include <mutex>
 
 #include "pointscale/reconstruction.h"
@@ -13,6 +17,9 @@ namespace pointscale {
 class Reconstructor {
  public:
   explicit Reconstructor(const MultiscaleModel& model);
+  ~Reconstructor();
+  Reconstructor(const Reconstructor&) = delete;
+  Reconstructor& operator=(const Reconstructor&) = delete;
 
   // gains   k by 1 (per band) or k by #P (per point, in the model's point order)
   // base    #P by 3 row-major (a NumPy array's buffer), an edited P^0 in the caller's
@@ -22,15 +29,12 @@ class Reconstructor {
   Points reconstruct(const Eigen::MatrixXd& gains, const double* base, const Vec3& origin,
                      const ProgressCallback* progress = nullptr);
 
-  Eigen::Index points() const { return model_.base.rows(); }
-  int bands() const { return model_.bands(); }
+  Eigen::Index points() const;
+  int bands() const;
 
  private:
-  MultiscaleModel model_;  // reordered: row r (column r of details) is point order_[r]
-  IndexList order_;        // #P
-  ReconstructionWorkspace workspace_;
-  Points level_;           // the level being built, reordered
-  Eigen::MatrixXd gains_;  // per-point gains, reordered
+  struct State;  // the reordered model and the workspace (detail/reconstruct_levels.h)
+  std::unique_ptr<State> state_;
   std::mutex busy_;
 };
 

@@ -37,9 +37,6 @@ class Decomposition:
     # The decomposition's per-level report, kept from the run that made it: a loaded model has
     # no reports of its own, so load() restores them from the file.
     _stats: list | None = field(default=None, repr=False, compare=False)
-    # reconstruct()'s working arrays, kept between calls: two (n, 3) arrays, 48 bytes per point,
-    # which at 100k points saves 2-3 ms a call of faulting fresh pages in.
-    _buffers: object = field(default_factory=_core.ReconstructionBuffers, repr=False, compare=False)
     # A decomposition of a mirrored half (pointscale.mirror): _model holds the whole model, and
     # every output for the half's points is symmetrised through this.
     _mirror: object = field(default=None, repr=False, compare=False)
@@ -103,13 +100,12 @@ class Decomposition:
         """Per level (0 first): support points, kernel width, projections that did not converge."""
         return self._stats if self._stats is not None else self._model.reports
 
-    def _reconstruct(self, gains: np.ndarray, base, *, keep_levels: bool = False, progress=None, buffers=None,
-                     threads: int = 0):
+    def _reconstruct(self, gains: np.ndarray, base, *, keep_levels: bool = False, progress=None, threads: int = 0):
         """The core's reconstruction of the whole model from checked gains and base (world
         coordinates): the finest level, or with keep_levels (levels, normals) of every level.
         The core adds the origin in place (a NumPy sum would allocate every level again)."""
         return self._model.reconstruct(gains, base=base, keep_levels=keep_levels, progress=progress,
-                                       origin=self.origin, buffers=buffers, threads=threads)
+                                       origin=self.origin, threads=threads)
 
     def _kept(self, key: str, make):
         """What make() returns, made once and kept with this decomposition (fold references...)."""
@@ -567,8 +563,9 @@ def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None, fol
     fold_reference  "input" (default): count only the folds that the gains or the edit add to
            the input's own; "base": every fold over the base
     Normals of every level are recomputed from that level's current points, so with unit gains
-    and the unedited base this returns the input. The decomposition keeps two (n, 3) working
-    arrays from the first call on (48 bytes per point) for the calls after it.
+    and the unedited base this returns the input. Stateless: each call on an edited base finds
+    afresh what the edit needs (each base point's ring, plane and foot), so an editing session
+    that calls it over and over keeps a Reconstructor instead, which finds that once.
     """
     _check_decomposition(dec)
     g = _gains_array(dec, gains)
@@ -576,7 +573,7 @@ def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None, fol
     from .folds import _fold_mode_option, _reference_option
     mode = _fold_mode_option(folds)
     _reference_option(fold_reference)
-    out = dec._reconstruct(g, b, progress=as_callback(progress), buffers=dec._buffers)
+    out = dec._reconstruct(g, b, progress=as_callback(progress))
     return _result_with_folds(dec, out, b, mode, fold_reference)
 
 
@@ -592,10 +589,13 @@ def _result_with_folds(dec: Decomposition, out: np.ndarray, b, mode: str, fold_r
 
 
 class Reconstructor:
-    """reconstruct() for one decomposition over and over, as an editing session calls it.
+    """reconstruct() for one decomposition over and over, as an editing session calls it: the
+    one cache of reconstruction (reconstruct() itself keeps nothing).
 
     Holds the model in a spatially coherent point order, each level's grouping by cluster and
-    the working storage (about the decomposition's size again), so that a call costs the fits
+    the working storage (about the decomposition's size again); its first call on an edited
+    base finds what every edit needs (each base point's ring, plane and foot) and keeps it, and
+    it keeps the stored base's level normals for the gains last used. So a call costs the fits
     and little else. Results are bit for bit those of reconstruct(dec, gains, base). Calls on
     one Reconstructor run one at a time; use reconstruct() for a one-off call.
     """

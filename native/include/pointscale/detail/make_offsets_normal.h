@@ -13,11 +13,12 @@ struct Consistency {
   std::size_t pinned = 0;   // anchors kept at their finer position
 };
 
-// Normals depend on the anchors only (level_support.h), so the anchors are iterated first,
-// each halving its step when its move grows (near sharp features the plain iteration swings
-// with slope about -d kappa). An anchor that still does not settle is pinned to its finer
-// position (no detail in this band; the coarser bands carry it). Then every other point is made
-// consistent in one step, since its normal no longer depends on it: exact by construction.
+// The level aligner (align_level.h) with decompose's policy: normals depend on the anchors only
+// (level_support.h), so the anchors are iterated first, each halving its step when its move
+// grows (near sharp features the plain iteration swings with slope about -d kappa). An anchor
+// that still does not settle is pinned to its finer position (no detail in this band; the
+// coarser bands carry it). Then every other point is made consistent in one step, since its
+// normal no longer depends on it: exact by construction.
 // fine              #P by 3, P^l
 // level             #P by 3, P^{l-1} as projected; moved in place
 // layout            the points grouped as support.local is laid out (cluster_layout.h)

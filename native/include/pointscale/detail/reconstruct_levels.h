@@ -1,22 +1,52 @@
 // The level loop of reconstruction (reconstruction.h), which reconstruct() and Reconstructor
 // share, and what an edited base needs beyond the model.
 #pragma once
+#include <vector>
+
 #include "pointscale/reconstruction.h"
+#include "pointscale/spatial_order.h"
 
 namespace pointscale {
 
 // What an edited reconstruction needs beyond the model (edit_rotations.h), found from the
-// model alone: each base point's ring and its plane, and each point's foot (from the model's
-// own unedited reconstruction). Kept in the workspace, since it is costly to find.
-EditSupport edit_support(const MultiscaleModel& model);
+// model alone: each base point's ring and its plane, and each point's foot. No edit changes
+// it, so a Reconstructor finds it once, on its first edited call.
+struct EditSupport {
+  IndexList rings;        // #P by ring_size, base_rings(base, parts)
+  int ring_size = 0;
+  IndexList feet;         // #P, base_feet(base, base_normals, the finest level)
+  EditRingPlanes planes;  // ring_planes(base, rings, ring_size)
+};
+
+// base, base_normals, finest  #P by 3: the model's base, its normals and its unedited finest
+//                             level; parts: the model's part labels, or empty
+EditSupport edit_support(const Points& base, const IndexList& parts, const Points& base_normals, const Points& finest);
+
+// The working storage of the level loop. reconstruct() makes a fresh one per call; a
+// Reconstructor keeps one between calls.
+struct ReconstructionWorkspace {
+  std::vector<LabelGroups> groups;  // per level: its points grouped like support.local, or empty
+  Points normals[2];                // two levels' normals, alternating
+  Points centroids;                 // a level's anchors
+  EditSupport edit;                 // found on the first edited call
+  std::vector<Mat3> rotation;       // an edited base: each point's turn
+  Points unedited;                  // an edited base: the level as the stored base gives it
+  // An edited base: the stored base's level normals for the gains last used, 1..levels - 1
+  // (level 0's are the model's). They do not depend on the edit, so an editing session that
+  // keeps its gains fits them once.
+  Eigen::MatrixXd unedited_gains;
+  std::vector<Points> unedited_normals;
+  bool kept = false;  // kept between calls: the unedited normals are worth keeping
+};
 
 // The level loop that reconstruct(), reconstruct_from_base() and Reconstructor run, on p (P^0 in, the finest level
 // out). edited: p may differ from the stored base, so the levels of the stored base are built
 // beside it, and each level's normals, fitted there, are turned by the edit's rotation at each
-// point; kept: receives every level and its normals when not null; workspace: null, or what
-// the caller keeps between calls. Returns how the edit's turns were measured.
+// point; kept: receives every level and its normals when not null; workspace: the storage,
+// which must hold the edit support when edited (its feet sized #P). Returns how the edit's
+// turns were measured.
 EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p,
                                                bool edited, Reconstruction* kept, int upto,
-                                               const ProgressCallback* progress, ReconstructionWorkspace* workspace);
+                                               const ProgressCallback* progress, ReconstructionWorkspace& workspace);
 
 }  // namespace pointscale
