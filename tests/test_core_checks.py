@@ -129,6 +129,8 @@ def test_the_other_option_structs_have_their_checks():
          "interpolation_neighbors must be >= 1"),
         (_core.RayOptions(max_distance=-1.0), lambda o: _core.shoot_rays(GOOD[:5], GOOD[:5] / np.linalg.norm(
             GOOD[:5], axis=1)[:, None], GOOD, kernel=1.0, options=o), "max_distance must be > 0"),
+        (_core.RayOptions(max_distance=0.0), lambda o: _core.shoot_rays(GOOD[:5], GOOD[:5] / np.linalg.norm(
+            GOOD[:5], axis=1)[:, None], GOOD, kernel=1.0, options=o), "max_distance must be > 0"),
         (_core.MlsOptions(neighbors=2000), lambda o: _core.project(GOOD, base, kernel=1.0, mls=o),
          "neighbors must be at most 1024"),
     ]

@@ -138,6 +138,9 @@ def test_shoot_rays_hits_a_sphere_and_reports_misses():
     # A hit beyond max_distance is a miss too.
     _, _, missed = ps.shoot_rays(o[1:], d[1:], plane, max_distance=0.1)
     assert missed.tolist() == [True]
+    # A limit of 0 would miss everything: refused (None is no limit).
+    with pytest.raises(ValueError, match="max_distance must be > 0"):
+        ps.shoot_rays(o[1:], d[1:], plane, max_distance=0.0)
 
 
 def test_rayshoot_decomposition_round_trip_on_its_finest_level():

@@ -27,7 +27,7 @@ RayHits shoot_rays(const Points& origins, const Points& directions, const Spatia
   const int k = std::min<int>(options.neighbors, support.size());
   const Points& s = support.points();
   const Eigen::VectorXd inv_h2 = h.array().square().inverse();
-  const double limit = options.max_distance > 0 ? options.max_distance : std::numeric_limits<double>::infinity();
+  const double limit = options.max_distance;
   RayHits out;
   out.positions = origins;
   out.distances = Eigen::VectorXd::Zero(n);

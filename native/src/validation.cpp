@@ -258,8 +258,9 @@ void validate(const RayOptions& options) {
   check_count(options.neighbors, "neighbors", 3, max_neighbors);
   check_positive(options.tolerance, "tolerance");
   check_count(options.max_iterations, "max_iterations", 1, max_iterations);
-  if (!(std::isfinite(options.max_distance) && options.max_distance >= 0.0))
-    fail(format("max_distance must be > 0 (or 0 for no limit), got %s", number(options.max_distance).c_str()));
+  // A limit of 0 would make every hit a miss; no limit is infinity (the default).
+  if (!(options.max_distance > 0.0))
+    fail(format("max_distance must be > 0 (infinity: no limit), got %s", number(options.max_distance).c_str()));
   if (!(options.min_cosine >= 0.0 && options.min_cosine < 1.0))
     fail(format("min_cosine must be in [0, 1), got %s", number(options.min_cosine).c_str()));
 }

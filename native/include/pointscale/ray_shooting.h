@@ -5,6 +5,7 @@
 // and bisected instead. A hit more than 3 kernel widths from every sample (the zero set runs on
 // over holes and past boundaries) counts as a miss.
 #pragma once
+#include <limits>
 #include <vector>
 
 #include "pointscale/decomposition.h"
@@ -18,7 +19,7 @@ struct RayOptions {
   int neighbors = 24;          // support points in each plane fit
   double tolerance = 1e-9;     // convergence: step along the ray below tolerance x h
   int max_iterations = 50;     // iteration cap per ray
-  double max_distance = 0.0;   // a hit farther than this from the origin is a miss; 0: no limit
+  double max_distance = std::numeric_limits<double>::infinity();  // a hit farther than this from the origin is a miss
   double min_cosine = 0.05;    // a plane within acos(min_cosine) of the ray direction is a miss
 };
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import warnings
 from collections.abc import Mapping
@@ -670,7 +671,7 @@ def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decima
         diffusion = smoother_options(diffusion_iterations, lam, taubin, diffusion_neighbors)
     p = as_points(points)  # the core checks the rest, once centred
     n_arr = None if normals is None else as_array(normals, "normals")
-    limit = 0.0 if max_distance is None else number(max_distance, "max_distance")
+    limit = math.inf if max_distance is None else number(max_distance, "max_distance")
     fine_kernel = number(fine_kernel, "fine_kernel")
     origin = centre(p)
     # The rays take more iterations than the projections: a ray's first plane can lie far off.

@@ -4,6 +4,7 @@ keeps thin sheets apart.
 """
 from __future__ import annotations
 
+import math
 import warnings
 import numpy as np
 
@@ -129,7 +130,7 @@ def shoot_rays(origins, directions, onto, *, kernel: float = 1.0, neighbors: int
     s = as_points(onto, "onto", min_count=3)
     require_surface(s, "onto", allow_planar=True)
     origin = centre(s)
-    limit = 0.0 if max_distance is None else number(max_distance, "max_distance")
+    limit = math.inf if max_distance is None else number(max_distance, "max_distance")
     rays = _core.RayOptions(neighbors=number(neighbors, "neighbors", integer=True),
                             tolerance=number(tolerance, "tolerance"),
                             max_iterations=number(max_iterations, "max_iterations", integer=True),
