@@ -14,7 +14,6 @@ from ._checks import (MAX_DIFFUSION_ITERATIONS, MAX_LEVELS, MIN_COARSE_POINTS, a
                       require_surface, thread_option)
 from ._diffusion import diffusion_options
 from .multiscale import Decomposition, _require_finite_model
-from .multiscale import decompose_rayshoot, rays_missed_points  # noqa: F401  (still importable from here)
 
 
 def smooth_diffusion(points, iterations: int = 10, *, lam: float = 0.5, taubin: bool = False, mu=None,
