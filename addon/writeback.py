@@ -178,9 +178,11 @@ def _remember(mesh, token, dec) -> None:
         gone = next(iter(_cache))
         _cache.pop(gone)
         _solvers.pop(gone, None)
-    key = (mesh.session_uid, token)
-    _cache[key] = dec
-    _solvers.pop(key, None)  # made for the engine object this one replaces
+    _cache[(mesh.session_uid, token)] = dec
+    # A new engine object for this mesh: its solvers belong to the ones before (an undo back to
+    # them makes one again, in a fraction of a decompose's time).
+    for key in [key for key in _solvers if key[0] == mesh.session_uid]:
+        _solvers.pop(key)
 
 
 def forget_all() -> None:

@@ -159,5 +159,11 @@ def test_rebuild_and_bake_share_one_kept_reconstructor():
     assert writeback.reconstructor(me, ps) is solver
     assert np.array_equal(h.key(me, "Multiscale Filter"), expected.astype(np.float32))
 
-    writeback.forget_all()  # a new file: the engine object and its solver are made again
+    # Decomposed again: the old engine object's solver is let go at once (it holds a copy of the
+    # model), and the next press makes one for the new object.
+    h.decompose(obj, levels=3)
+    assert not [key for key in writeback._solvers if key[0] == me.session_uid]
     assert writeback.reconstructor(me, ps) is not solver
+
+    writeback.forget_all()  # a new file: the engine object and its solver are made again
+    assert not writeback._solvers
