@@ -204,8 +204,9 @@ PYBIND11_MODULE(_core, m) {
         if (!base.is_none()) {
           b = base.cast<DoubleArray>();
           if (b.ndim() != 2 || b.shape(1) != 3) throw std::invalid_argument("base must be an (n, 3) array");
-          // The core takes the rows by pointer, so it cannot see their count: checked here.
-          check_base(Eigen::Map<const Points>(b.data(), b.shape(0), 3), n, o);
+          // The core takes the rows by pointer, so it cannot see their count: checked here (the
+          // rest of the base the core checks).
+          check_rows(b.shape(0), n, "base");
         }
         const double* base_rows = base.is_none() ? nullptr : b.data();
         PythonProgress p(progress);

@@ -117,8 +117,8 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
 
 Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
                            bool keep_levels, int upto, const ProgressCallback* progress) {
-  check_gains(gains, model.bands(), model.base.rows());
   if (base) return reconstruct_from_base(model, gains, *base, keep_levels, upto, progress);
+  check_gains(gains, model.bands(), model.base.rows());
   return reconstruct_levels(model, gains, model.base, false, keep_levels, upto, progress);
 }
 

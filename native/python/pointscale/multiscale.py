@@ -543,9 +543,9 @@ def _base_array(dec: Decomposition, base):
     is symmetric only to rounding and its clusters' asymmetry, which an edit must not add)."""
     if base is None:
         return None
-    b = as_points(base, "base")  # its count and reach the core checks (validation.h)
     if dec._mirror is None:
-        return b
+        return as_array(base, "base")  # its count, values and reach the core checks (validation.h)
+    b = as_points(base, "base")  # checked before the mirror's arithmetic reads it
     if b.shape[0] != dec.n_points:  # the half's, which only this package knows
         raise ValueError(f"base must have the decomposition's {dec.n_points} points, got {b.shape[0]}")
     require_near(b, dec.origin, "base", "the decomposition")
