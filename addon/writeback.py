@@ -147,20 +147,23 @@ def release_levels(dec) -> None:
 def decomposition(mesh, ps):
     """The engine object for ``mesh``, rebuilt at most once per token: from the saved model
     (format 1), or by decomposing the Basis again (format 2, as long as the engine takes)."""
-    token = mesh[storage.PROP].get("token", "") if storage.has_data(mesh) else ""
-    key = (mesh.session_uid, token)
+    key = _key(mesh)
     dec = _cache.get(key)
     if dec is None:
         dec = storage.load(mesh, ps, threads=preferences.get().threads)
-        _remember(mesh, token, dec)
+        _remember(mesh, key[1], dec)
     return dec
+
+
+def _key(mesh) -> tuple:
+    """What the engine object of ``mesh`` is kept under: the mesh, and its decomposition's token."""
+    return mesh.session_uid, mesh[storage.PROP].get("token", "") if storage.has_data(mesh) else ""
 
 
 def reconstructor(mesh, ps):
     """The Reconstructor of ``mesh``'s engine object (decomposition()), made on first use and
     kept while that object is."""
-    token = mesh[storage.PROP].get("token", "") if storage.has_data(mesh) else ""
-    key = (mesh.session_uid, token)
+    key = _key(mesh)
     dec = decomposition(mesh, ps)
     held = _solvers.get(key)
     if held is not None and held[0] is dec:
