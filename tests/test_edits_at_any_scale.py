@@ -85,7 +85,14 @@ def test_tall_handles_stand_on_the_lifted_base(handle_models, key):
 
 
 def test_steep_lifts_keep_tall_handles_nearly_upright(handle_models):
-    """Lifts as high as they are wide (slopes up to 40 degrees): measured up to 3.4 degrees."""
+    """Lifts as high as they are wide (slopes up to 40 degrees): measured up to 3.9 degrees.
+
+    Beyond the requirement's lifts, and not within its 3 degrees everywhere: each point's detail
+    hangs from its own base point, and the base points of a handle's top drift from its foot on
+    the way down through the levels (by 0.07 on the slender handles at the plane's edge). A
+    vertical lift stretches the base along its slope by 1 / cos(slope), so that drift grows and
+    the handle leans: turning every offset by the exact rotation at the handle's centre gives
+    the same 5.5 degrees there as the engine (bench/edits_bench.py, "lift height / radius" 1)."""
     points, handle, centres, dec, _ = handle_models["tall", 0.2, 1.0]
     worst = 0.0
     for centre, radius in lifts(centres, 0.5):
@@ -95,6 +102,38 @@ def test_steep_lifts_keep_tall_handles_nearly_upright(handle_models):
         worst = max(worst, angles.max())
     assert worst < 4.5
 
+
+
+# Planes the requirement's figures were not tuned on: other sizes, handle counts, proportions
+# (3.3-3.75 times taller than wide, 5-6 widths apart) and sample spacings. Measured 2026-12-03 at
+# lifts half as high as wide: at most 1.36 degrees where the bound is 3, and 1.43 where it is 6.
+OTHER_PLANES = {  # (size, count, width, height, sample spacing, decimation, kernel, levels)
+    "wide plane, 5 x 5": (3.0, 5, 0.12, 0.45, 0.024, 0.2, 1.0, 6),
+    "small plane, 3 x 3": (1.5, 3, 0.1, 0.38, 0.016, 0.2, 2.0, 5),
+    "3 x 3, decimation 0.1": (2.0, 3, 0.12, 0.4, 0.02, 0.1, 1.0, 4),
+}
+
+
+@pytest.mark.filterwarnings("ignore:levels=.*a base this coarse")  # the flat base these need
+@pytest.mark.parametrize("name", list(OTHER_PLANES))
+def test_tall_handles_on_other_planes_stand_on_the_lifted_base(name):
+    size, count, width, height, sample, decimation, kernel, levels = OTHER_PLANES[name]
+    points, handle, centres = ps.shapes.handles_plane(size=size, count=count, width=width, height=height,
+                                                      spacing=sample)
+    dec = ps.decompose(points, levels=levels, decimation=decimation, kernel=kernel)
+    assert np.ptp(dec.base[:, 2]) < 0.25 * height
+    spacing = size / count
+    middle = count // 2
+    on = centres[middle * count + middle]
+    between = centres[(middle - 1) * count + middle - 1] + spacing / 2
+    for centre in (on, between):
+        for factor in (0.75, 1.0, 1.5, 2.0):
+            radius = factor * spacing
+            lift = 0.5 * radius
+            result = ps.reconstruct(dec, base=gaussian_lift(dec.base, centre, radius, lift))
+            angles = handle_axis_angles(result, points, handle, centres,
+                                        lambda c: lift_normal(c, centre, radius, lift)[0])
+            assert angles.max() < (3.0 if factor >= 1.0 else 6.0), (name, centre, radius, angles.round(2))
 
 def test_every_band_is_applied_along_the_lifted_surface_normal():
     """Requirement 2: a flat base with gentle detail, lifted; at every level the direction a
@@ -113,6 +152,41 @@ def test_every_band_is_applied_along_the_lifted_surface_normal():
         assert np.median(angle) < 1.0 and np.percentile(angle, 99) < 3.0, (l, np.median(angle),
                                                                            np.percentile(angle, 99))
 
+
+
+def rotation_between(a, b):
+    """(n, 3, 3): the smallest rotation taking each unit a onto b."""
+    v, c = np.cross(a, b), np.einsum("ij,ij->i", a, b)
+    k = np.zeros((len(a), 3, 3))
+    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+    k -= k.transpose(0, 2, 1)
+    return np.eye(3) + k + (k @ k) / (1.0 + c)[:, None, None]
+
+
+@pytest.mark.parametrize("kernel", [1.0, 2.0])
+def test_bands_of_pronounced_detail_turn_with_the_lift(kernel):
+    """Requirement 2 where the detail is steep enough that a band's own direction, before any
+    edit, is off the base's normal by about 2 degrees (waves 0.01 high, 6 per unit): the lift's
+    analytic rotation at each point must turn that direction. Measured 2026-12-03 over four
+    lifts: median at most 0.22 degrees, 99th percentile at most 0.83."""
+    points = ps.shapes.wavy_patch(30000, coarse=0.0, fine=0.01, fine_frequency=6.0)
+    dec = ps.decompose(points, levels=3, kernel=kernel)
+    unedited = ps.reconstruct_levels(dec)
+    for centre, radius, height in (((0.2, -0.1), 0.5, 0.3), ((-0.3, 0.25), 0.35, 0.2), ((0.0, 0.0), 0.8, 0.5),
+                                   ((0.5, -0.5), 0.4, 0.4)):
+        centre = np.array(centre)
+        levels = ps.reconstruct_levels(dec, base=gaussian_lift(dec.base, centre, radius, height))
+        normal = lift_normal(dec.base[:, :2], centre, radius, height)
+        turn = rotation_between(np.tile([0.0, 0.0, 1.0], (len(normal), 1)), normal)
+        for l in range(dec.n_bands):
+            d = dec.details[l]
+            use = np.abs(d) > 1e-6 * diagonal(points)
+            direction = (levels[l + 1] - levels[l])[use] / d[use, None]
+            before = (unedited[l + 1] - unedited[l])[use] / d[use, None]
+            reference = np.einsum("nij,nj->ni", turn[use], before)
+            angle = np.degrees(np.arccos(np.clip(np.abs(np.einsum("ij,ij->i", direction, reference)), 0, 1)))
+            assert np.median(angle) < 0.5 and np.percentile(angle, 99) < 1.5, (centre, l, np.median(angle),
+                                                                              np.percentile(angle, 99))
 
 def test_a_local_edit_leaves_the_rest_as_it_was():
     points = ps.shapes.bumpy_sphere(20000)
