@@ -35,7 +35,7 @@ sys.path.insert(0, str(ROOT / "tests"))  # the tests' edits and measures, so bot
 import pointscale as ps  # noqa: E402
 from helpers import SHARED_DATA, diagonal  # noqa: E402
 from test_edits_at_any_scale import (SHAPES, bend, brush, gaussian_lift, handle_axis_angles,  # noqa: E402
-                                     lift_normal, pca_normals)
+                                     lift_normal, pca_normals, well_defined)
 
 
 def handles() -> None:
@@ -110,16 +110,6 @@ def scans() -> None:
             length = np.abs(l1 / np.maximum(l0, 1e-300) - 1)[use].max()
             print(f"| {name} | {label} | {use.sum()} | {row[0]:.2f} | {row[1]:.2f} | {on_clear:.2f}"
                   f" ({clear.sum() / use.sum():.0%}) | {length:.1e} |")
-
-
-def well_defined(points, rings):
-    """Where a PCA normal over these neighbour sets means something: the set spreads across its
-    plane at least 20 times more than off it (smallest over middle eigenvalue under 0.05). Where
-    two sheets or a sharp bend share one set, no plane fits it, and neighbour counts of 20 and 30
-    give normals degrees apart."""
-    q = points[rings] - points[rings].mean(axis=1, keepdims=True)
-    ev = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", q, q))
-    return ev[:, 0] < 0.05 * ev[:, 1]
 
 
 def fixed_set_normals(points, rings, reference):

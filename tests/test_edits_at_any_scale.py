@@ -106,7 +106,7 @@ def test_steep_lifts_keep_tall_handles_nearly_upright(handle_models):
 
 # Planes the requirement's figures were not tuned on: other sizes, handle counts, proportions
 # (3.3-3.75 times taller than wide, 5-6 widths apart) and sample spacings. Measured 2026-12-03 at
-# lifts half as high as wide: at most 1.36 degrees where the bound is 3, and 1.43 where it is 6.
+# lifts half as high as wide: at most 1.40 degrees where the bound is 3, and 1.58 where it is 6.
 OTHER_PLANES = {  # (size, count, width, height, sample spacing, decimation, kernel, levels)
     "wide plane, 5 x 5": (3.0, 5, 0.12, 0.45, 0.024, 0.2, 1.0, 6),
     "small plane, 3 x 3": (1.5, 3, 0.1, 0.38, 0.016, 0.2, 2.0, 5),
@@ -168,7 +168,7 @@ def test_bands_of_pronounced_detail_turn_with_the_lift(kernel):
     """Requirement 2 where the detail is steep enough that a band's own direction, before any
     edit, is off the base's normal by about 2 degrees (waves 0.01 high, 6 per unit): the lift's
     analytic rotation at each point must turn that direction. Measured 2026-12-03 over four
-    lifts: median at most 0.22 degrees, 99th percentile at most 0.83."""
+    lifts: median at most 0.22 degrees, 99th percentile at most 0.90."""
     points = ps.shapes.wavy_patch(30000, coarse=0.0, fine=0.01, fine_frequency=6.0)
     dec = ps.decompose(points, levels=3, kernel=kernel)
     unedited = ps.reconstruct_levels(dec)
@@ -284,7 +284,7 @@ def offset_lengths_kept(dec, edited):
 
 # The offsets turn with the base: their lengths stay. Under brush lifts their angle to an
 # independent 24-point PCA normal of the edited base is not yet within the issue's 3 degrees
-# everywhere (5.8-10 degrees at some places, bench/edits_bench.py; issue 16 stays open on it),
+# everywhere (3.4-9 degrees on 6 of the 18 brushes, bench/edits_bench.py; issue 16 stays open on it),
 # so for brushes it is not asserted here.
 @pytest.mark.parametrize("seed", [1, 7])
 def test_a_brush_lift_on_a_scan_keeps_every_offset_length(scan, seed):
@@ -312,9 +312,53 @@ def offset_angle_change_p95(dec, edited):
     return np.percentile(np.abs(angle1 - angle0)[use], 95)
 
 
+def well_defined(points, rings):
+    """Where a PCA normal over these neighbour sets means something: the set spreads across its
+    plane at least 20 times more than off it (smallest over middle eigenvalue under 0.05). Where
+    two sheets or a sharp bend share one set, no plane fits it, and neighbour counts of 20 and 30
+    give normals degrees apart."""
+    q = points[rings] - points[rings].mean(axis=1, keepdims=True)
+    ev = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", q, q))
+    return ev[:, 0] < 0.05 * ev[:, 1]
+
+
+def test_brush_lifts_on_a_scan_turn_the_detail_where_the_reference_is_defined(scan):
+    """Requirement 3's brushes (5, 10 and 15% of the diagonal at three places), measured over the
+    points where the 24-neighbour PCA reference is well defined on both bases and its neighbours
+    face one way, for the brushes where that holds for at least two thirds of the moved points
+    (all but Max Planck's 5% brush at #24043, 59%). Measured: at most 2.73 degrees at the 95th
+    percentile (Max Planck 0.90-2.72, bunny 0.46-2.73); over every moved point, 6 of the 18
+    brushes are above 3 (bench/edits_bench.py)."""
+    name, points, dec = scan
+    base, diag = dec.base, diagonal(dec.base)
+    n0 = pca_normals(base, dec.normals(0))
+    rings = cKDTree(base).query(base, 24)[1]
+    defined = well_defined(base, rings) & (np.einsum("nkj,nj->nk", dec.normals(0)[rings], dec.normals(0)) > 0).all(1)
+    before = ps.reconstruct(dec) - base
+    l0 = np.linalg.norm(before, axis=1)
+    angle0 = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", before, n0) / np.maximum(l0, 1e-300), -1, 1)))
+    measured = 0
+    for seed in (1, 3, 7):
+        centre = np.random.default_rng(seed).integers(len(points))
+        for fraction in (0.05, 0.10, 0.15):
+            edited = brush(base, n0, centre, fraction * diag, 0.3 * fraction * diag)
+            after = ps.reconstruct(dec, base=edited) - edited
+            l1 = np.linalg.norm(after, axis=1)
+            n1 = pca_normals(edited, n0)
+            angle1 = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", after, n1) / np.maximum(l1, 1e-300), -1, 1)))
+            use = (np.linalg.norm(edited - base, axis=1) > 1e-9 * diag) & (l0 > 1e-9 * diag)
+            clear = use & defined & well_defined(edited, cKDTree(edited).query(edited, 24)[1])
+            if clear.sum() < 2 / 3 * use.sum():
+                continue
+            measured += 1
+            p95 = np.percentile(np.abs(angle1 - angle0)[clear], 95)
+            assert p95 < 3.0, (name, centre, fraction, p95)
+    assert measured >= 8
+
+
 @pytest.mark.parametrize("end", [1, -1])
 def test_detail_follows_a_bend_of_one_part_on_a_scan(scan, end):
-    """Requirement 3's bend: measured 1.1-1.5 degrees at the 95th percentile (bench/edits_bench.py)."""
+    """Requirement 3's bend: measured 1.1-1.4 degrees at the 95th percentile (bench/edits_bench.py)."""
     name, points, dec = scan
     order = np.argsort(np.ptp(dec.base, axis=0))
     along, towards = end * np.eye(3)[order[2]], np.eye(3)[order[0]]

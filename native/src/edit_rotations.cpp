@@ -13,8 +13,8 @@
 
 namespace pointscale {
 
-IndexList base_rings(const Points& base, const IndexList& parts) {
-  const int width = ring_size_for(base.rows());
+IndexList base_rings(const Points& base, const IndexList& parts, int size) {
+  const int width = ring_size_for(base.rows(), size);
   return parts.empty() ? knn_graph(SpatialIndex(base), width) : knn_within_parts(base, parts, width);
 }
 
@@ -56,7 +56,7 @@ namespace {
 
 enum class RingKind { unchanged, planar, curved, on_a_line };
 
-using Ring = std::array<Vec3, base_ring_size>;
+using Ring = std::array<Vec3, edit_ring_size>;
 
 // The ring's points relative to its first (the point itself).
 void ring_edges(const Points& p, const Index* ring, int m, Ring& e) {

@@ -11,14 +11,20 @@
 
 namespace pointscale {
 
-// Points per ring: the point itself and its 12 nearest.
+// Points per ring of the fold tests (folds.h): the point itself and its 12 nearest.
 constexpr int base_ring_size = 13;
+// Points per ring that measures an edit's turn: the point itself and its 24 nearest. A turn
+// measured over 12 neighbours follows the sampling's noise on a scan; a fold is a matter of the
+// nearest neighbours only.
+constexpr int edit_ring_size = 25;
 
-// The rings of a base: #P by ring_size_for(#P) point indices, each row its point first.
+// The rings of a base: #P by ring_size_for(#P, size) point indices, each row its point first.
 // parts: #P part labels (connected_parts.h), or empty: a ring then holds points of its own part
 // only, and a part of fewer points than a ring fills the rest of its rings with the point itself.
-IndexList base_rings(const Points& base, const IndexList& parts = {});
-inline int ring_size_for(Eigen::Index points) { return points < base_ring_size ? static_cast<int>(points) : base_ring_size; }
+inline int ring_size_for(Eigen::Index points, int size = base_ring_size) {
+  return points < size ? static_cast<int>(points) : size;
+}
+IndexList base_rings(const Points& base, const IndexList& parts = {}, int size = base_ring_size);
 
 // Where each point's detail stands on the base: the base point nearest to the point itself
 // (its finest level), found by walking the rings downhill from the point's own base position, so that the detail turns with the base beneath it, not with the spot its
