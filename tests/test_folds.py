@@ -214,8 +214,9 @@ def test_max_planck_spikes_are_prevented():
 def test_folds_on_sharp_cad_edges_are_prevented(gains, reference):
     """fandisk's rings across its sharp edges have hardly any plane: with the input reference
     one fold stayed at the 40-round cap (at 1e-12 of its gain, its ring's members still at
-    about 1% of theirs) until a fold that outlasts ten rounds gave its strength to its ring.
-    Measured: none left, in 8 to 13 rounds."""
+    about 1% of theirs) until a fold in its tenth round gave its strength to its ring.
+    Measured: none left, in 8 to 13 rounds. On this coarse CAD part prevention reaches nearly
+    every point (6,261-6,459 of 6,475), so the check of untouched points covers the rest only."""
     dec = ps.decompose(ps.io.read(shared_model("fandisk.ply")).points, levels=4)
     plain = ps.reconstruct(dec, gains)
     prevented, folds = ps.reconstruct(dec, gains, folds="prevent", fold_reference=reference)

@@ -5,6 +5,8 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "pointscale/connected_parts.h"
 #include "pointscale/parallel.h"
@@ -57,6 +59,12 @@ namespace {
 enum class RingKind { unchanged, planar, curved, on_a_line };
 
 using Ring = std::array<Vec3, edit_ring_size>;
+
+// A ring's points are held in a Ring.
+void check_ring_size(int ring_size) {
+  if (ring_size < 1 || ring_size > edit_ring_size)
+    throw std::invalid_argument("ring_size must be 1.." + std::to_string(edit_ring_size) + ", got " + std::to_string(ring_size));
+}
 
 // The ring's points relative to its first (the point itself).
 void ring_edges(const Points& p, const Index* ring, int m, Ring& e) {
@@ -175,6 +183,7 @@ Mat3 ring_rotation(const Points& original, const Points& edited, const Index* ri
 }  // namespace
 
 EditRingPlanes ring_planes(const Points& original, const IndexList& rings, int ring_size) {
+  check_ring_size(ring_size);
   const std::size_t n = static_cast<std::size_t>(original.rows());
   EditRingPlanes planes;
   planes.normals.resize(n);
@@ -200,6 +209,7 @@ std::vector<Mat3> edit_rotations(const Points& original, const Points& edited, c
 void edit_rotations(const Points& original, const Points& edited, const IndexList& rings, int ring_size,
                     const std::vector<Mat3>& cluster_rotation, const IndexList& labels, const EditRingPlanes* planes,
                     std::vector<Mat3>& rotation, EditRotationReport* report) {
+  check_ring_size(ring_size);
   const std::size_t n = static_cast<std::size_t>(original.rows());
   rotation.resize(n);
   std::atomic<std::size_t> counts[4] = {{0}, {0}, {0}, {0}};

@@ -242,7 +242,7 @@ void find_folds_at(const MultiscaleModel& model, const FoldReference& ref, const
   folds_at(ref, edited, result, points, kind);
 }
 
-// Rounds a point folds, its strength rising each time, before its ring takes that strength too.
+// The round of folding (its strength rising each time) in which a point's ring first takes its strength too.
 constexpr int stubborn_rounds = 10;
 
 FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
@@ -300,9 +300,11 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
 
   // A point that still folds once its own gain is all but gone folds because of its ring: the
   // averaging leaves each ring member a share of its gain (about 1% on a sharp CAD edge), and on
-  // a ring with hardly any plane that share keeps the fold. Such a point hands its strength on to
-  // its ring's members, which then limit like folds of their own.
-  const double stubborn = 1.0 - std::pow(options.step, stubborn_rounds);
+  // a ring with hardly any plane that share keeps the fold. From its stubborn_rounds-th round of
+  // folding on, such a point hands its strength on to its ring's members, which then limit like
+  // folds of their own (and, holding that strength, hand it on at once if they fold too).
+  double stubborn = 0.0;  // the strength a point reaches in its stubborn_rounds-th round of folding
+  for (int k = 0; k < stubborn_rounds; ++k) stubborn = 1.0 - options.step * (1.0 - stubborn);
   while (!folds.empty() && out.rounds < options.max_rounds) {
     ++out.rounds;
     for (Index f : folds) {
@@ -312,15 +314,18 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
     // Each layer again where the one below changed, and one ring step around it: the largest
     // (widening) or the mean (averaging) of each point and its neighbours, the mean adding up
     // in the neighbours' order, so that it is the same sum wherever it is recomputed.
-    dirty = folds;
-    for (Index f : folds) {
-      const double w = strength[static_cast<std::size_t>(f)];
-      if (w < stubborn) continue;
-      const Index* ring = ref.rings.data() + static_cast<std::size_t>(ref.slot[static_cast<std::size_t>(f)]) * width;
-      for (std::size_t m = 1; m < width; ++m) {
-        const Index j = ref.order[static_cast<std::size_t>(ring[m])];
-        double& wj = strength[static_cast<std::size_t>(j)];
-        if (wj < w) { wj = w; dirty.push_back(j); }
+    {
+      const auto add = start_list(dirty);  // each point once: with smoothing 0 dirty is written to as it is
+      for (Index f : folds) add(f);
+      for (Index f : folds) {
+        const double w = strength[static_cast<std::size_t>(f)];
+        if (w < stubborn) continue;
+        const Index* ring = ref.rings.data() + static_cast<std::size_t>(ref.slot[static_cast<std::size_t>(f)]) * width;
+        for (std::size_t m = 1; m < width; ++m) {
+          const Index j = ref.order[static_cast<std::size_t>(ring[m])];
+          double& wj = strength[static_cast<std::size_t>(j)];
+          if (wj < w) { wj = w; add(j); }
+        }
       }
     }
     for (int k = 1; k <= passes; ++k) {

@@ -34,7 +34,8 @@ IndexList base_rings(const Points& base, const IndexList& parts = {}, int size =
 // where the base faces the same way (normals within 60 degrees): where the base curves inward
 // under tall detail the nearest base point can lie anywhere, and the point's own base position
 // is the better guess. Otherwise the point stands on its own base position.
-// base, base_normals, finest  #P by 3; rings from base_rings(base). Returns #P base point indices.
+// base, base_normals, finest  #P by 3; rings from base_rings(base, parts, edit_ring_size).
+// Returns #P base point indices.
 IndexList base_feet(const Points& base, const Points& base_normals, const Points& finest, const IndexList& rings,
                     int ring_size);
 
@@ -52,10 +53,12 @@ struct EditRingPlanes {
   std::vector<Vec3> normals;  // #P
   std::vector<unsigned char> kind;  // #P
 };
+// ring_size at most edit_ring_size (std::invalid_argument otherwise), as for edit_rotations.
 EditRingPlanes ring_planes(const Points& original, const IndexList& rings, int ring_size);
 
 // original, edited   #P by 3, the stored base and the edited one
-// rings              #P by ring_size, from base_rings(original)
+// rings              #P by ring_size, from base_rings(original, parts, edit_ring_size); ring_size
+//                    at most edit_ring_size (std::invalid_argument otherwise)
 // cluster_rotation   #C rotations of the level-0 clusters (transported_rotations), with
 // labels             #P each point's level-0 cluster: they tell a ring that turned over from
 //                    one that turned past 90 degrees, and stand in where a ring has no plane

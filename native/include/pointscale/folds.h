@@ -109,11 +109,12 @@ struct FoldLimitReport {
 // the two-way ring neighbours (ring members and the points whose rings hold it) and A their
 // mean, each applied s = smoothing times: D^s keeps w on a plateau s steps wide around each
 // fold, and A^s ramps it down to 0 over s more steps, so the limiter reaches w at the fold
-// itself and falls smoothly to 1, exactly 1 beyond 2s ring steps from it. A point that still
-// folds after 10 rounds, its own gain all but gone, gives its strength to its ring's members too
-// (the averaging leaves them a share of their gain, which keeps a fold on a ring with hardly any
-// plane), so around it the limiter reaches one ring step further. Points farther than that
-// from every fold are not written to: they keep their result bit for bit.
+// itself and falls smoothly to 1, exactly 1 beyond 2s ring steps from it. A point that folds in
+// a tenth round, its own gain all but gone, gives its strength to its ring's members too (the
+// averaging leaves them a share of their gain, which keeps a fold on a ring with hardly any
+// plane); they then count as folds of that strength, so around it the limiter reaches one ring
+// step further, and a member that folds as well hands the strength on at once. Points farther
+// than that from every fold are not written to: they keep their result bit for bit.
 //
 // edited  as for find_folds, in the result's coordinates; origin: the stored base's offset
 //         from them (the result's coordinates = the model's + origin), used when edited is null

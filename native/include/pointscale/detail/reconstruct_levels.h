@@ -12,7 +12,7 @@ namespace pointscale {
 // model alone: each base point's ring and its plane, and each point's foot. No edit changes
 // it, so a Reconstructor finds it once, on its first edited call.
 struct EditSupport {
-  IndexList rings;        // #P by ring_size, base_rings(base, parts)
+  IndexList rings;        // #P by ring_size, base_rings(base, parts, edit_ring_size)
   int ring_size = 0;
   IndexList feet;         // #P, base_feet(base, base_normals, the finest level)
   EditRingPlanes planes;  // ring_planes(base, rings, ring_size)
