@@ -35,7 +35,8 @@ sys.path.insert(0, str(ROOT / "tests"))  # the tests' edits and measures, so bot
 import pointscale as ps  # noqa: E402
 from helpers import SHARED_DATA, diagonal  # noqa: E402
 from test_edits_at_any_scale import (SHAPES, bend, brush, gaussian_lift, handle_axis_angles,  # noqa: E402
-                                     lift_normal, pca_normals, well_defined)
+                                     lift_normal, pca_normals, plane_is_clear,
+                                     reference_defined)
 
 
 def handles() -> None:
@@ -81,7 +82,7 @@ def scans() -> None:
         n0 = pca_normals(base, dec.normals(0))
         before = ps.reconstruct(dec) - base
         rings = cKDTree(base).query(base, 24)[1]
-        defined = well_defined(base, rings) & (np.einsum("nkj,nj->nk", dec.normals(0)[rings], dec.normals(0)) > 0).all(1)
+        defined = reference_defined(dec)
         edits = []
         for seed in (1, 3, 7):
             centre = np.random.default_rng(seed).integers(len(points))
@@ -105,7 +106,7 @@ def scans() -> None:
                 polar1 = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", after, n1) / l1, -1, 1)))
                 change.append(np.abs(polar1 - polar0))
             row = [np.percentile(c[use], 95) for c in change]
-            clear = use & defined & well_defined(edited, cKDTree(edited).query(edited, 24)[1])
+            clear = use & defined & plane_is_clear(edited)
             on_clear = np.percentile(change[0][clear], 95)
             length = np.abs(l1 / np.maximum(l0, 1e-300) - 1)[use].max()
             print(f"| {name} | {label} | {use.sum()} | {row[0]:.2f} | {row[1]:.2f} | {on_clear:.2f}"

@@ -314,14 +314,28 @@ def offset_angle_change_p95(dec, edited):
     return np.percentile(np.abs(angle1 - angle0)[use], 95)
 
 
-def well_defined(points, rings):
-    """Where a PCA normal over these neighbour sets means something: the set spreads across its
+def plane_is_clear(points, k=24):
+    """Where a PCA normal over each point's k nearest means something: they spread across their
     plane at least 20 times more than off it (smallest over middle eigenvalue under 0.05). Where
     two sheets or a sharp bend share one set, no plane fits it, and neighbour counts of 20 and 30
     give normals degrees apart."""
+    rings = cKDTree(points).query(points, k)[1]
     q = points[rings] - points[rings].mean(axis=1, keepdims=True)
     ev = np.linalg.eigvalsh(np.einsum("nki,nkj->nij", q, q))
     return ev[:, 0] < 0.05 * ev[:, 1]
+
+
+def one_sided(points, normals, k=24):
+    """Where each point's k nearest all face its way (normals agreeing): one sheet, not two."""
+    rings = cKDTree(points).query(points, k)[1]
+    return (np.einsum("nkj,nj->nk", normals[rings], normals) > 0).all(1)
+
+
+def reference_defined(dec):
+    """Where the independent PCA-24 reference is well defined on the stored base: one-sided and
+    clearly planar. An edit must leave the edited base clearly planar there too
+    (plane_is_clear(edited))."""
+    return plane_is_clear(dec.base) & one_sided(dec.base, dec.normals(0))
 
 
 def test_brush_lifts_on_a_scan_turn_the_detail_where_the_reference_is_defined(scan):
@@ -334,8 +348,7 @@ def test_brush_lifts_on_a_scan_turn_the_detail_where_the_reference_is_defined(sc
     name, points, dec = scan
     base, diag = dec.base, diagonal(dec.base)
     n0 = pca_normals(base, dec.normals(0))
-    rings = cKDTree(base).query(base, 24)[1]
-    defined = well_defined(base, rings) & (np.einsum("nkj,nj->nk", dec.normals(0)[rings], dec.normals(0)) > 0).all(1)
+    defined = reference_defined(dec)
     before = ps.reconstruct(dec) - base
     l0 = np.linalg.norm(before, axis=1)
     angle0 = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", before, n0) / np.maximum(l0, 1e-300), -1, 1)))
@@ -349,7 +362,7 @@ def test_brush_lifts_on_a_scan_turn_the_detail_where_the_reference_is_defined(sc
             n1 = pca_normals(edited, n0)
             angle1 = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", after, n1) / np.maximum(l1, 1e-300), -1, 1)))
             use = (np.linalg.norm(edited - base, axis=1) > 1e-9 * diag) & (l0 > 1e-9 * diag)
-            clear = use & defined & well_defined(edited, cKDTree(edited).query(edited, 24)[1])
+            clear = use & defined & plane_is_clear(edited)
             if clear.sum() < 2 / 3 * use.sum():
                 continue
             measured += 1
