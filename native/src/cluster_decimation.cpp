@@ -4,6 +4,9 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <deque>
+#include <functional>
+#include <memory>
+#include <new>
 #include <queue>
 
 #include "pointscale/parallel.h"
@@ -103,12 +106,33 @@ Cluster whole(const Working& w, double max_variation) {
   return c;
 }
 
+// Where the split tree keeps its nodes, at addresses that stay put. A worker's own allocations
+// stay resident in its malloc arena once freed (glibc keeps a thread arena's free top while its
+// trim threshold, raised by the first large free, exceeds it), so after a decimation every
+// worker would hold the nodes it made. The parallel subtrees therefore take their nodes from
+// one block the calling thread allocates, each from its share, and only past that share from
+// a deque of their own.
+class ClusterStore {
+ public:
+  ClusterStore() = default;
+  ClusterStore(Cluster* block, std::size_t capacity) : block_(block), capacity_(capacity) {}
+  Cluster& add(const Cluster& c) {
+    if (used_ < capacity_) return *new (block_ + used_++) Cluster(c);
+    return overflow_.emplace_back(c);
+  }
+
+ private:
+  Cluster* block_ = nullptr;
+  std::size_t capacity_ = 0, used_ = 0;
+  std::deque<Cluster> overflow_;
+};
+
 // Splits c through its centroid along its axis (or by side, see describe_sides), in place and
 // without a branch (which side a point falls on is a coin toss, and mispredicting it cost most
 // of the time): each point is swapped with the first point not known to be below, which then
 // advances past it if it is below. Then both halves are summed about c's centroid. Returns
 // false, and marks c unsplittable, when every point falls on one side.
-bool split(Cluster& c, Working& w, std::deque<Cluster>& store, double max_variation) {
+bool split(Cluster& c, Working& w, ClusterStore& store, double max_variation) {
   const Vec3 o = c.centroid;
   const Vec3 axis = c.axis;
   double* x = w.xyz.data();
@@ -151,8 +175,8 @@ bool split(Cluster& c, Working& w, std::deque<Cluster>& store, double max_variat
   Moments below_sums, above_sums;
   for (std::size_t i = c.begin; i < lo; ++i) below_sums.add(&x[3 * i], o);
   for (std::size_t i = lo; i < c.end; ++i) above_sums.add(&x[3 * i], o);
-  Cluster* a = &store.emplace_back(Cluster{c.begin, lo, Vec3::Zero(), Vec3::Zero(), 0.0, false});
-  Cluster* b = &store.emplace_back(Cluster{lo, c.end, Vec3::Zero(), Vec3::Zero(), 0.0, false});
+  Cluster* a = &store.add(Cluster{c.begin, lo, Vec3::Zero(), Vec3::Zero(), 0.0, false});
+  Cluster* b = &store.add(Cluster{lo, c.end, Vec3::Zero(), Vec3::Zero(), 0.0, false});
   describe(*a, o, static_cast<double>(lo - c.begin), below_sums, max_variation);
   describe(*b, o, static_cast<double>(c.end - lo), above_sums, max_variation);
   if (sheets) {
@@ -166,7 +190,7 @@ bool split(Cluster& c, Working& w, std::deque<Cluster>& store, double max_variat
 
 // Splits c and its descendants down to clusters of fewer than `smallest` points.
 // (A stack, not recursion: a lopsided cloud can make the tree deep.)
-void split_down(Cluster& c, Working& w, std::deque<Cluster>& store, std::size_t smallest, double max_variation) {
+void split_down(Cluster& c, Working& w, ClusterStore& store, std::size_t smallest, double max_variation) {
   std::vector<Cluster*> stack{&c};
   while (!stack.empty()) {
     Cluster* t = stack.back();
@@ -253,10 +277,10 @@ Clustering cluster_decimate(const Points& points, std::size_t target, double max
   std::vector<Cluster*> frontier{&root};
   const std::size_t wanted = 16 * static_cast<std::size_t>(thread_count());
   // Level by level while there are fewer subtrees than workers want, each level in parallel.
-  std::deque<std::deque<Cluster>> level_stores;  // one per split, kept for the nodes' addresses
+  std::deque<ClusterStore> level_stores;  // one per split, kept for the nodes' addresses
   while (!frontier.empty() && frontier.size() < wanted) {
     std::vector<unsigned char> was_split(frontier.size(), 0);
-    std::vector<std::deque<Cluster>*> store(frontier.size());
+    std::vector<ClusterStore*> store(frontier.size());
     for (auto& s : store) s = &level_stores.emplace_back();
     parallel_for(frontier.size(), [&](std::size_t b, std::size_t e) {
       for (std::size_t t = b; t < e; ++t) {
@@ -269,12 +293,23 @@ Clustering cluster_decimate(const Points& points, std::size_t target, double max
       if (was_split[t]) { next.push_back(frontier[t]->child[0]); next.push_back(frontier[t]->child[1]); }
     frontier.swap(next);
   }
-  std::vector<std::deque<Cluster>> stores(frontier.size());
+  // A subtree of s points ends in clusters of about smallest / 2 points or more, so it makes
+  // about 4 s / smallest nodes; more spill over into its own deque. The block is left
+  // unconstructed, so the pages of a share that goes unused are never touched.
+  std::vector<std::size_t> share(frontier.size() + 1, 0);
+  for (std::size_t t = 0; t < frontier.size(); ++t)
+    share[t + 1] = share[t] + 6 * (frontier[t]->end - frontier[t]->begin) / smallest + 16;
+  std::allocator<Cluster> allocator;
+  const std::unique_ptr<Cluster, std::function<void(Cluster*)>> block(
+      allocator.allocate(share.back()), [&](Cluster* c) { allocator.deallocate(c, share.back()); });
+  std::vector<ClusterStore> stores;
+  stores.reserve(frontier.size());
+  for (std::size_t t = 0; t < frontier.size(); ++t) stores.emplace_back(block.get() + share[t], share[t + 1] - share[t]);
   parallel_for(frontier.size(), [&](std::size_t b, std::size_t e) {
     for (std::size_t t = b; t < e; ++t) split_down(*frontier[t], w, stores[t], smallest, max_variation);
   }, {}, 1);
 
-  std::deque<Cluster> late;
+  ClusterStore late;
   BestFirst open;
   std::vector<Cluster*> done;
   done.reserve(target);
