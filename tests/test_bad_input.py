@@ -389,3 +389,28 @@ def test_a_progress_callback_returning_a_non_bool_is_a_value_error(dec, returned
             call(lambda fraction: returned)
         with pytest.raises(ps.Cancelled):  # False still cancels
             call(lambda fraction: False)
+
+
+@pytest.mark.parametrize("array", ["base", "details"])
+def test_a_decomposition_that_comes_out_not_finite_is_refused(monkeypatch, array):
+    # The last guard of decompose reads the core's model in place (a copy would add its size to
+    # the peak). No valid input makes the core return a NaN, so the model it returns is made to
+    # say it holds one.
+    real = _core.decompose
+
+    class NotFinite:
+        def __init__(self, model):
+            self._model = model
+
+        def __getattr__(self, name):
+            if name == f"{array}_finite":
+                return False
+            return getattr(self._model, name)
+
+    monkeypatch.setattr(_core, "decompose", lambda *args, **kwargs: NotFinite(real(*args, **kwargs)))
+    with pytest.raises(ValueError, match=f"decomposition's {array.rstrip('s')} is not finite"):
+        ps.decompose(ps.shapes.bumpy_sphere(3000), levels=3)
+
+
+def test_a_finite_model_says_so(dec):
+    assert dec._model.base_finite and dec._model.details_finite

@@ -149,6 +149,10 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("details", [](const MultiscaleModel& s) { return Eigen::MatrixXd(s.details); })
       .def_property_readonly("base_normals", [](const MultiscaleModel& s) { return s.base_normals; })
       .def_property_readonly("bands", &MultiscaleModel::bands)
+      // Read in place: copying the base and the detail out to test them would add their size
+      // to the peak of the decompose that has just built them.
+      .def_property_readonly("base_finite", [](const MultiscaleModel& s) { return s.base.allFinite(); })
+      .def_property_readonly("details_finite", [](const MultiscaleModel& s) { return s.details.allFinite(); })
       .def_property_readonly("points", [](const MultiscaleModel& s) { return s.base.rows(); })
       .def_property_readonly("parts", [](const MultiscaleModel& s) -> py::object {
         if (s.parts.empty()) return py::none();

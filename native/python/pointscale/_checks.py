@@ -137,9 +137,13 @@ def thread_option(threads) -> int:
 def finite_result(array, what: str):
     """A last guard: a result with NaN or infinite values is refused, never returned."""
     if not np.isfinite(array).all():
-        raise ValueError(f"{what} is not finite: the input lies outside what the core can represent "
-                         "(extreme coordinates, gains or a damaged decomposition)")
+        raise_not_finite(what)
     return array
+
+
+def raise_not_finite(what: str):
+    raise ValueError(f"{what} is not finite: the input lies outside what the core can represent "
+                     "(extreme coordinates, gains or a damaged decomposition)")
 
 
 def as_callback(progress):

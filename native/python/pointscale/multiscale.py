@@ -13,7 +13,7 @@ import numpy as np
 from . import _core
 from ._checks import (MAX_COORDINATE, MAX_EXTENT, MAX_LEVELS, MAX_NEIGHBORS, MIN_COARSE_POINTS, as_array,
                       as_callback, as_normals_of, as_points, centre, finite_result, mls_options, number, positive,
-                      require_extent, require_near, thread_option)
+                      raise_not_finite, require_extent, require_near, thread_option)
 from ._diffusion import settings_record, smoother_options
 
 # MIN_COARSE_POINTS (from the core's limits): the coarsest level keeps gamma**(levels-1) * n
@@ -510,8 +510,9 @@ def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> 
 
 
 def _require_finite_model(dec: "Decomposition") -> None:
-    finite_result(dec._model.base, "the decomposition's base")
-    finite_result(dec._model.details, "the decomposition's detail")
+    for finite, what in ((dec._model.base_finite, "base"), (dec._model.details_finite, "detail")):
+        if not finite:
+            raise_not_finite(f"the decomposition's {what}")
 
 
 def _check_decomposition(dec) -> None:
