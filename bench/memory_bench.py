@@ -5,9 +5,11 @@
 Each cell is one decompose(points, levels=4) in a fresh process: the peak RSS (VmHWM, reset
 once the points are loaded) minus the RSS after loading, over the number of points. The
 inputs are bench/run.py's: the 1M bumpy sphere in Morton order and shuffled, and the dragon
-and Buddha scans in file order. More threads than cores still start one worker each, so a
-2-core machine shows what an 8-core one would hold. Target (issue 19): under 300 bytes per
-point at every thread count.
+and Buddha scans in file order; then the 1M sphere again with sheets=True (its normals
+estimated by the call) and with levels=6 (whose model alone holds 36 bytes per point more
+per band). More threads than cores still start one worker each, so a 2-core machine shows
+what an 8-core one would hold. Target (issue 19): under 300 bytes per point at every thread
+count.
 """
 from __future__ import annotations
 
@@ -22,7 +24,10 @@ sys.path.insert(0, str(HERE))
 import run  # noqa: E402  (bench/run.py: the inputs and the VmHWM helpers)
 
 
-def worker(source: str, order: str, threads: int, data_dir: Path) -> None:
+VARIANTS = {"": {}, "sheets": {"sheets": True}, "levels 6": {"levels": 6}}
+
+
+def worker(source: str, order: str, threads: int, data_dir: Path, variant: str) -> None:
     import pointscale as ps
 
     if source.endswith(".ply"):
@@ -31,7 +36,7 @@ def worker(source: str, order: str, threads: int, data_dir: Path) -> None:
         points = run.in_order(run.bumpy_sphere(run.parse_size(source)), "synthetic", order)
     run.reset_peak_rss()
     before = run.vm_status_kib()["VmRSS"]
-    ps.decompose(points, levels=4, threads=threads)
+    ps.decompose(points, **{"levels": 4, **VARIANTS[variant]}, threads=threads)
     peak = run.vm_status_kib()["VmHWM"]
     print(json.dumps({"bytes_per_point": (peak - before) * 1024.0 / len(points)}))
 
@@ -40,25 +45,26 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--threads", default="1,2,4,8", help="thread counts (default 1,2,4,8)")
     p.add_argument("--data-dir", type=Path, default=run.DEFAULT_DATA)
-    p.add_argument("--worker", nargs=3, metavar=("SOURCE", "ORDER", "THREADS"), help=argparse.SUPPRESS)
+    p.add_argument("--worker", nargs=4, metavar=("SOURCE", "ORDER", "THREADS", "VARIANT"), help=argparse.SUPPRESS)
     args = p.parse_args(argv)
     if args.worker:
-        worker(args.worker[0], args.worker[1], int(args.worker[2]), args.data_dir)
+        worker(args.worker[0], args.worker[1], int(args.worker[2]), args.data_dir, args.worker[3])
         return 0
     threads = [int(t) for t in args.threads.split(",")]
-    inputs = [("1M", "coherent"), ("1M", "shuffled")]
-    inputs += [(name, "coherent") for name in run.DATASETS if (args.data_dir / name).exists()]
+    inputs = [("1M", "coherent", ""), ("1M", "shuffled", "")]
+    inputs += [(name, "coherent", "") for name in run.DATASETS if (args.data_dir / name).exists()]
+    inputs += [("1M", "coherent", "sheets"), ("1M", "coherent", "levels 6")]
     print("decompose(points, levels=4): peak RSS per input point, bytes, one fresh process per cell")
-    print(f"| input | order | " + " | ".join(f"{t} threads" for t in threads) + " |")
-    print("|---|---|" + "---|" * len(threads))
-    for source, order in inputs:
+    print(f"| input | order | option | " + " | ".join(f"{t} threads" for t in threads) + " |")
+    print("|---|---|---|" + "---|" * len(threads))
+    for source, order, variant in inputs:
         cells = []
         for t in threads:
             out = subprocess.run([sys.executable, __file__, "--data-dir", str(args.data_dir), "--worker", source, order,
-                                  str(t)], capture_output=True, text=True, check=True)
+                                  str(t), variant], capture_output=True, text=True, check=True)
             cells.append(f"{json.loads(out.stdout.strip().splitlines()[-1])['bytes_per_point']:.0f}")
         print(f"| {source} | {run.order_label('synthetic' if source[0].isdigit() else 'scan', order)} | "
-              + " | ".join(cells) + " |", flush=True)
+              f"{variant or '-'} | " + " | ".join(cells) + " |", flush=True)
     return 0
 
 

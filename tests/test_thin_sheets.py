@@ -109,3 +109,15 @@ def test_sheets_with_a_method_that_would_blend_the_sides_is_refused(option):
     points, normals, _ = thin_plate(1.0, 1.0, spacing=0.03)
     with pytest.raises(ValueError, match="sheets=True"):
         ps.decompose(points, 3, normals=normals, sheets=True, **option)
+
+
+def test_sheets_without_normals_use_the_normals_estimate_normals_gives():
+    # Without normals the core estimates the sides itself, so that the decomposition holds them
+    # once; they are the very normals estimate_normals returns, to the last bit.
+    rng = np.random.default_rng(5)
+    points = thin_walled_box(size=(1.0, 0.7, 0.5), spacing=0.02, gap=0.012)[0]
+    points = points[rng.permutation(len(points))]
+    estimated = ps.decompose(points, levels=3, sheets=True)
+    given = ps.decompose(points, levels=3, sheets=True, normals=ps.estimate_normals(points))
+    assert np.array_equal(estimated.details, given.details)
+    assert np.array_equal(estimated.base, given.base)

@@ -294,17 +294,30 @@ PYBIND11_MODULE(_core, m) {
   }, py::arg("points"), py::arg("parts"), py::arg("k"), py::arg("threads") = 0);
 
   // diffusion: the "diffusion" smoother's settings, or None for the MLS smoother.
+  // estimate_sides (thin sheets without normals): the sides are the centred points' oriented
+  // normals, as estimate_normals gives them, found here and handed to decompose, so that
+  // nothing else holds them. Given normals are handed over too (decompose releases them once
+  // it holds them in its own numbering); the caller's array is left as it is.
   m.def("decompose", [](const DoubleArray& points, const DoubleArray& origin, py::object normals,
                         DecomposeOptions options, const DiffusionOptions* diffusion, py::object progress,
-                        int threads) {
+                        int threads, bool estimate_sides) {
     Points p = to_points_centred(points, to_origin(origin));
-    const OptionalPoints n(normals);
-    options.thin_sheets = options.thin_sheets && n.present;  // the Python layer orients normals when none are given
+    OptionalPoints n(normals);
+    if (estimate_sides && n.present) throw py::value_error("estimate_sides is for decompositions without normals");
+    options.thin_sheets = options.thin_sheets && (n.present || estimate_sides);
     options.diffusion = diffusion;
     PythonProgress pp(progress);
-    return without_gil(threads, [&] { return decompose(std::move(p), n.get(), options, pp.get()); });
+    return without_gil(threads, [&] {
+      if (estimate_sides) {
+        n.p = oriented_normals(Points(p), 16, orientation_width);
+        if (!n.p.allFinite()) throw std::invalid_argument("the normals are not finite");
+        n.present = true;
+      }
+      if (!n.present) return decompose(std::move(p), nullptr, options, pp.get());
+      return decompose(std::move(p), std::move(n.p), options, pp.get());
+    });
   }, py::arg("points"), py::arg("origin"), py::arg("normals"), py::arg("options"), py::arg("diffusion") = py::none(),
-     py::arg("progress") = py::none(), py::arg("threads") = 0);
+     py::arg("progress") = py::none(), py::arg("threads") = 0, py::arg("estimate_sides") = false);
 
   m.def("project", [](const DoubleArray& points, const DoubleArray& onto, double kernel, MlsOptions options,
                       py::object progress, py::object near, int threads) {

@@ -44,6 +44,7 @@ double median(Eigen::VectorXd v) {
 struct Sheets {
   bool on = false;
   const Points* input_normals = nullptr;  // #P by 3, in the input's numbering
+  Points* owned = nullptr;                // the same when handed over: released once renumbered
   Points sides;                           // #P by 3, the same in the points' current numbering
 };
 
@@ -70,6 +71,7 @@ Decimation decimate_level(Points& fine, std::size_t target, const DecomposeOptio
   if (first) {
     original = number_by_groups(fine, out.clusters.labels, out.groups);
     if (sheets.on) sheets.sides = gather_rows(*sheets.input_normals, original);
+    if (sheets.on && sheets.owned) Points().swap(*sheets.owned);  // sides holds them from here on
     release_free_memory();  // the input's copy in its own numbering
   }
   if (sheets.on) out.cluster_sides = cluster_side_normals(sheets.sides, out.clusters.labels, cluster_count);
@@ -138,13 +140,15 @@ LevelReport level_report(const LevelSupport& support, const Projection& projecti
 // Orients level 0 from the input normals, or by propagation over its clusters, then every finer
 // level like the level below it at the same point (as reconstruction does), flipping the
 // details with the normals so that detail x normal is unchanged.
-void orient_levels(MultiscaleModel& model, LevelTurns& turns, const Points* input_normals, const IndexList& original,
-                   const ProgressStage& stage) {
+// sides: with thin sheets, the input normals in the points' numbering (the same rows, exactly).
+void orient_levels(MultiscaleModel& model, LevelTurns& turns, const Points* input_normals, const Points* sides,
+                   const IndexList& original, const ProgressStage& stage) {
   const LevelSupport& s0 = model.support[0];
   // Point i's reference: its input normal, or its level-0 cluster's propagated normal.
   Points cluster_normals;
   if (!input_normals) cluster_normals = oriented_anchor_normals(turns.last_anchors(), s0);
   auto reference0 = [&](Eigen::Index i) -> Vec3 {
+    if (sides) return sides->row(i).transpose();
     if (input_normals) return input_normals->row(original[static_cast<std::size_t>(i)]).transpose();
     return cluster_normals.row(s0.labels[i]).transpose();
   };
@@ -154,8 +158,11 @@ void orient_levels(MultiscaleModel& model, LevelTurns& turns, const Points* inpu
 
 }  // namespace
 
-MultiscaleModel decompose(Points points, const Points* input_normals, const DecomposeOptions& options,
-                          const ProgressCallback* progress) {
+namespace {
+
+// owned: input_normals itself when the caller handed them over, else nullptr.
+MultiscaleModel decompose_levels(Points points, const Points* input_normals, Points* owned,
+                                 const DecomposeOptions& options, const ProgressCallback* progress) {
   check_decompose_input(points, input_normals, options);
   const Eigen::Index n = points.rows();
   const int k = options.levels - 1;
@@ -175,6 +182,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   Sheets sheets;
   sheets.on = options.thin_sheets && input_normals && input_normals->rows() == n;
   sheets.input_normals = input_normals;
+  sheets.owned = owned;
 
   for (int step = 0; step < k; ++step) {
     const int l = k - step;  // builds level l-1 from level l
@@ -200,7 +208,7 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
 
   release_free_memory();  // the last step's temporaries: the model is nearly all that is left
   const ProgressStage last = all.sub(k / (k + 0.2), 1.0);
-  orient_levels(model, turns, input_normals, original, last);
+  orient_levels(model, turns, input_normals, sheets.on ? &sheets.sides : nullptr, original, last);
   model.base = std::move(fine);
   // The model is complete: release what else is held before its arrays are copied to the
   // input's numbering, one at a time.
@@ -209,6 +217,18 @@ MultiscaleModel decompose(Points points, const Points* input_normals, const Deco
   renumber_model(model, original);
   last.report(1.0);
   return model;
+}
+
+}  // namespace
+
+MultiscaleModel decompose(Points points, const Points* input_normals, const DecomposeOptions& options,
+                          const ProgressCallback* progress) {
+  return decompose_levels(std::move(points), input_normals, nullptr, options, progress);
+}
+
+MultiscaleModel decompose(Points points, Points input_normals, const DecomposeOptions& options,
+                          const ProgressCallback* progress) {
+  return decompose_levels(std::move(points), &input_normals, &input_normals, options, progress);
 }
 
 }  // namespace pointscale

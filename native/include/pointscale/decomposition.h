@@ -60,4 +60,10 @@ struct MultiscaleModel {
 MultiscaleModel decompose(Points points, const Points* input_normals, const DecomposeOptions& options,
                           const ProgressCallback* progress = nullptr);
 
+// The same with the normals handed over: with thin sheets they are released once the points'
+// own numbering holds them (at the first decimation), so that a decomposition of a large
+// two-sided scan does not hold them twice.
+MultiscaleModel decompose(Points points, Points input_normals, const DecomposeOptions& options,
+                          const ProgressCallback* progress = nullptr);
+
 }  // namespace pointscale

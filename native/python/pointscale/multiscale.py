@@ -447,9 +447,9 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     message = coarse_base_warning(len(p), levels, decimation)
     if message:
         warnings.warn(message, stacklevel=2)
-    if sheets:
-        from .sheets import sheet_sides
-        n_arr = sheet_sides(p, n_arr, threads)
+    if sheets and n_arr is not None:
+        from .sheets import check_sheet_normals
+        check_sheet_normals(n_arr)
     progress = as_callback(progress)
     origin = centre(p)
     settings = dict(_settings_record(options), smoother=smoother, encoding=encoding)
@@ -458,7 +458,7 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     if diffusion is not None:
         settings["diffusion"] = settings_record(diffusion)
     model = _core.decompose(p, origin, n_arr, options=options, diffusion=diffusion, progress=progress,
-                            threads=thread_option(threads))
+                            threads=thread_option(threads), estimate_sides=bool(sheets) and n_arr is None)
     dec = Decomposition(model, origin, settings)
     _require_finite_model(dec)
     if diffusion is not None:

@@ -10,19 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .surface import estimate_normals
 
-
-def sheet_sides(points: np.ndarray, normals, threads: int = 0) -> np.ndarray:
-    """The (n, 3) outward normals that tell the sides apart: the given ones, else estimated and oriented.
-
-    Raises ValueError for a zero normal, which faces neither side.
-    """
-    if normals is None:
-        return estimate_normals(points, orient=True, threads=threads)
+def check_sheet_normals(normals: np.ndarray) -> None:
+    """Given outward normals tell the sides apart; a zero normal faces neither, so it is refused
+    (ValueError). Without normals, the core estimates and orients them itself (16 neighbours, as
+    estimate_normals), so that a decomposition does not hold them twice."""
     lengths = np.sqrt(np.einsum("ij,ij->i", normals, normals))
     zero = np.flatnonzero(~(lengths > 0.0))
     if zero.size:
         raise ValueError(f"sheets=True tells the sides of a wall by the normals, and {zero.size} of them are zero "
                          f"(the first at point {zero[0]}); give outward normals, or none to estimate them")
-    return normals
