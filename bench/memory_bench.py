@@ -34,7 +34,8 @@ def worker(source: str, order: str, threads: int, data_dir: Path, variant: str) 
         points = run.in_order(run.read_ply_xyz(data_dir / source), "scan", order)
     else:
         points = run.in_order(run.bumpy_sphere(run.parse_size(source)), "synthetic", order)
-    run.reset_peak_rss()
+    if not run.reset_peak_rss():
+        raise SystemExit("this kernel does not let VmHWM be reset (/proc/self/clear_refs): no figure")
     before = run.vm_status_kib()["VmRSS"]
     ps.decompose(points, **{"levels": 4, **VARIANTS[variant]}, threads=threads)
     peak = run.vm_status_kib()["VmHWM"]

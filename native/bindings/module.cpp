@@ -303,7 +303,8 @@ PYBIND11_MODULE(_core, m) {
                         int threads, bool estimate_sides) {
     Points p = to_points_centred(points, to_origin(origin));
     OptionalPoints n(normals);
-    if (estimate_sides && n.present) throw py::value_error("estimate_sides is for decompositions without normals");
+    if (estimate_sides && (n.present || !options.thin_sheets))
+      throw py::value_error("estimate_sides is for thin sheets without normals");
     options.thin_sheets = options.thin_sheets && (n.present || estimate_sides);
     options.diffusion = diffusion;
     PythonProgress pp(progress);

@@ -62,7 +62,8 @@ void bind_validation(py::module_& m) {
                                     const DiffusionOptions* diffusion, const std::string& what) {
     const OptionalPoints n(normals);
     options.diffusion = diffusion;
-    options.thin_sheets = options.thin_sheets && n.present;  // the package estimates the sides when none are given
+    // With none given, _core.decompose(estimate_sides=True) estimates the sides later.
+    options.thin_sheets = options.thin_sheets && n.present;
     check_decompose_input(points, n.get(), options, what.c_str());
   }, py::arg("points"), py::arg("normals"), py::arg("options"), py::arg("diffusion") = py::none(),
      py::arg("what") = "decompose");

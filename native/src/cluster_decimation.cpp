@@ -299,12 +299,16 @@ Clustering cluster_decimate(const Points& points, std::size_t target, double max
   std::vector<std::size_t> share(frontier.size() + 1, 0);
   for (std::size_t t = 0; t < frontier.size(); ++t)
     share[t + 1] = share[t] + 6 * (frontier[t]->end - frontier[t]->begin) / smallest + 16;
+  // Where address space is short (a ulimit, no overcommit), every subtree keeps a deque instead.
   std::allocator<Cluster> allocator;
+  Cluster* reserved = nullptr;
+  try { reserved = allocator.allocate(share.back()); } catch (const std::bad_alloc&) { reserved = nullptr; }
   const std::unique_ptr<Cluster, std::function<void(Cluster*)>> block(
-      allocator.allocate(share.back()), [&](Cluster* c) { allocator.deallocate(c, share.back()); });
+      reserved, [&](Cluster* c) { if (c) allocator.deallocate(c, share.back()); });
   std::vector<ClusterStore> stores;
   stores.reserve(frontier.size());
-  for (std::size_t t = 0; t < frontier.size(); ++t) stores.emplace_back(block.get() + share[t], share[t + 1] - share[t]);
+  for (std::size_t t = 0; t < frontier.size(); ++t)
+    stores.emplace_back(block ? block.get() + share[t] : nullptr, block ? share[t + 1] - share[t] : 0);
   parallel_for(frontier.size(), [&](std::size_t b, std::size_t e) {
     for (std::size_t t = b; t < e; ++t) split_down(*frontier[t], w, stores[t], smallest, max_variation);
   }, {}, 1);

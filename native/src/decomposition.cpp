@@ -71,7 +71,8 @@ Decimation decimate_level(Points& fine, std::size_t target, const DecomposeOptio
   if (first) {
     original = number_by_groups(fine, out.clusters.labels, out.groups);
     if (sheets.on) sheets.sides = gather_rows(*sheets.input_normals, original);
-    if (sheets.on && sheets.owned) Points().swap(*sheets.owned);  // sides holds them from here on
+    // sides holds them from here on: the decimation and level 0's orientation read only sides.
+    if (sheets.on && sheets.owned) Points().swap(*sheets.owned);
     release_free_memory();  // the input's copy in its own numbering
   }
   if (sheets.on) out.cluster_sides = cluster_side_normals(sheets.sides, out.clusters.labels, cluster_count);
