@@ -4,7 +4,6 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <deque>
-#include <functional>
 #include <memory>
 #include <new>
 #include <queue>
@@ -125,6 +124,24 @@ class ClusterStore {
   Cluster* block_ = nullptr;
   std::size_t capacity_ = 0, used_ = 0;
   std::deque<Cluster> overflow_;
+};
+
+// Room for n clusters, allocated but not constructed, so that the pages of a share that goes
+// unused are never touched. Empty where the address space cannot be had (a ulimit, no
+// overcommit): every subtree then keeps a deque.
+class ReservedClusters {
+ public:
+  explicit ReservedClusters(std::size_t n) : n_(n) {
+    try { data_ = std::allocator<Cluster>().allocate(n); } catch (const std::bad_alloc&) { data_ = nullptr; }
+  }
+  ~ReservedClusters() { if (data_) std::allocator<Cluster>().deallocate(data_, n_); }
+  ReservedClusters(const ReservedClusters&) = delete;
+  ReservedClusters& operator=(const ReservedClusters&) = delete;
+  Cluster* data() const { return data_; }
+
+ private:
+  Cluster* data_ = nullptr;
+  std::size_t n_;
 };
 
 // Splits c through its centroid along its axis (or by side, see describe_sides), in place and
@@ -294,21 +311,16 @@ Clustering cluster_decimate(const Points& points, std::size_t target, double max
     frontier.swap(next);
   }
   // A subtree of s points ends in clusters of about smallest / 2 points or more, so it makes
-  // about 4 s / smallest nodes; more spill over into its own deque. The block is left
-  // unconstructed, so the pages of a share that goes unused are never touched.
+  // about 4 s / smallest nodes; its share is 6 s / smallest + 16, and more spill over into
+  // its own deque.
   std::vector<std::size_t> share(frontier.size() + 1, 0);
   for (std::size_t t = 0; t < frontier.size(); ++t)
     share[t + 1] = share[t] + 6 * (frontier[t]->end - frontier[t]->begin) / smallest + 16;
-  // Where address space is short (a ulimit, no overcommit), every subtree keeps a deque instead.
-  std::allocator<Cluster> allocator;
-  Cluster* reserved = nullptr;
-  try { reserved = allocator.allocate(share.back()); } catch (const std::bad_alloc&) { reserved = nullptr; }
-  const std::unique_ptr<Cluster, std::function<void(Cluster*)>> block(
-      reserved, [&](Cluster* c) { if (c) allocator.deallocate(c, share.back()); });
+  const ReservedClusters block(share.back());
   std::vector<ClusterStore> stores;
   stores.reserve(frontier.size());
   for (std::size_t t = 0; t < frontier.size(); ++t)
-    stores.emplace_back(block ? block.get() + share[t] : nullptr, block ? share[t + 1] - share[t] : 0);
+    stores.emplace_back(block.data() ? block.data() + share[t] : nullptr, block.data() ? share[t + 1] - share[t] : 0);
   parallel_for(frontier.size(), [&](std::size_t b, std::size_t e) {
     for (std::size_t t = b; t < e; ++t) split_down(*frontier[t], w, stores[t], smallest, max_variation);
   }, {}, 1);

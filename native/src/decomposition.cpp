@@ -157,10 +157,6 @@ void orient_levels(MultiscaleModel& model, LevelTurns& turns, const Points* inpu
   model.base_normals = turns.orient(model.details, reference0);
 }
 
-}  // namespace
-
-namespace {
-
 // owned: input_normals itself when the caller handed them over, else nullptr.
 MultiscaleModel decompose_levels(Points points, const Points* input_normals, Points* owned,
                                  const DecomposeOptions& options, const ProgressCallback* progress) {
