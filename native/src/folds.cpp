@@ -3,7 +3,10 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <new>
 #include <stdexcept>
+#include <type_traits>
 
 #include "pointscale/edit_rotations.h"
 #include "pointscale/parallel.h"
@@ -194,39 +197,46 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input) 
   return ref;
 }
 
-std::size_t find_folds(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
-                       Eigen::Ref<const Points> result, std::vector<std::uint8_t>& kind) {
-  check_folds_input(model, ref, edited, result);
-  const std::size_t n = static_cast<std::size_t>(model.base.rows());
+namespace {
+
+// The FoldKind of every point, by point, from rows already in slot order (edited: null for the
+// stored base). Returns the number of points that fold.
+std::size_t folds_everywhere(const FoldReference& ref, const SlotRows* edited, const SlotRows& r,
+                             std::vector<std::uint8_t>& kind) {
+  const std::size_t n = ref.order.size();
   kind.assign(n, fold_none);
   const bool exempting = !ref.exempt.empty();
-  const Points r_by_slot = in_slot_order(result, ref);
-  Points edited_by_slot;
-  if (edited) edited_by_slot = in_slot_order(*edited, ref);
-  const SlotRows r = by_slot(r_by_slot), e = by_slot(edited_by_slot);
   parallel_for(n, [&](std::size_t b, std::size_t end) {
     for (std::size_t t = b; t < end; ++t)
       kind[static_cast<std::size_t>(ref.order[t])] =
-          fold_kind(ref, ref.other_sheet[t], exempting ? ref.exempt[t] : 0, edited ? &e : nullptr, r, static_cast<Index>(t));
+          fold_kind(ref, ref.other_sheet[t], exempting ? ref.exempt[t] : 0, edited, r, static_cast<Index>(t));
   }, {}, 4096);
   return n - static_cast<std::size_t>(std::count(kind.begin(), kind.end(), std::uint8_t(fold_none)));
 }
 
+}  // namespace
+
+std::size_t find_folds(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
+                       Eigen::Ref<const Points> result, std::vector<std::uint8_t>& kind) {
+  check_folds_input(model, ref, edited, result);
+  const Points r_by_slot = in_slot_order(result, ref);
+  Points edited_by_slot;
+  if (edited) edited_by_slot = in_slot_order(*edited, ref);
+  const SlotRows r = by_slot(r_by_slot), e = by_slot(edited_by_slot);
+  return folds_everywhere(ref, edited ? &e : nullptr, r, kind);
+}
+
 namespace {
 
-// find_folds_at on checked input: limit_folds calls it every round.
-void folds_at(const FoldReference& ref, const Points* edited, Eigen::Ref<const Points> result,
-              const IndexList& points, std::vector<std::uint8_t>& kind) {
+// find_folds_at on checked input, at slots: kind stays by point.
+void folds_at(const FoldReference& ref, const SlotRows* edited, const SlotRows& r, const IndexList& slots,
+              std::vector<std::uint8_t>& kind) {
   const bool exempting = !ref.exempt.empty();
-  const SlotRows r = by_point(result, ref);
-  SlotRows e{nullptr, 3, nullptr};
-  if (edited) e = by_point(*edited, ref);
-  parallel_for(points.size(), [&](std::size_t b, std::size_t end) {
+  parallel_for(slots.size(), [&](std::size_t b, std::size_t end) {
     for (std::size_t k = b; k < end; ++k) {
-      const std::size_t i = static_cast<std::size_t>(points[k]);
-      const Index s = ref.slot[i];
-      kind[i] = fold_kind(ref, ref.other_sheet[static_cast<std::size_t>(s)], exempting ? ref.exempt[static_cast<std::size_t>(s)] : 0,
-                          edited ? &e : nullptr, r, s);
+      const std::size_t s = static_cast<std::size_t>(slots[k]);
+      kind[static_cast<std::size_t>(ref.order[s])] =
+          fold_kind(ref, ref.other_sheet[s], exempting ? ref.exempt[s] : 0, edited, r, static_cast<Index>(s));
     }
   }, {}, 1024);
 }
@@ -237,10 +247,39 @@ void find_folds_at(const MultiscaleModel& model, const FoldReference& ref, const
                    Eigen::Ref<const Points> result, const IndexList& points, std::vector<std::uint8_t>& kind) {
   check_folds_input(model, ref, edited, result);
   if (kind.size() != static_cast<std::size_t>(result.rows())) throw std::invalid_argument("kind must have #P entries");
-  for (Index i : points)
+  IndexList slots(points.size());
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const Index i = points[k];
     if (i < 0 || i >= result.rows()) throw std::invalid_argument("points to test must be indices of points");
-  folds_at(ref, edited, result, points, kind);
+    slots[k] = ref.slot[static_cast<std::size_t>(i)];
+  }
+  const SlotRows r = by_point(result, ref);
+  SlotRows e{nullptr, 3, nullptr};
+  if (edited) e = by_point(*edited, ref);
+  folds_at(ref, edited ? &e : nullptr, r, slots, kind);
 }
+
+// n values, all zero, in pages the system zeroes as they are first touched: prevention touches
+// only the rings near folds, so the rest of a large model's layers cost nothing.
+template <class T>
+class ZeroedArray {
+  static_assert(std::is_trivial<T>::value, "all-zero bytes must be the value zero");
+
+ public:
+  explicit ZeroedArray(std::size_t n) : data_(static_cast<T*>(std::calloc(n > 0 ? n : 1, sizeof(T)))) {
+    if (!data_) throw std::bad_alloc();
+  }
+  ~ZeroedArray() { std::free(data_); }
+  ZeroedArray(ZeroedArray&& other) noexcept : data_(other.data_) { other.data_ = nullptr; }
+  ZeroedArray(const ZeroedArray&) = delete;
+  ZeroedArray& operator=(const ZeroedArray&) = delete;
+  ZeroedArray& operator=(ZeroedArray&&) = delete;
+  T& operator[](std::size_t i) { return data_[i]; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
+
+ private:
+  T* data_;
+};
 
 // The round of folding (its strength rising each time) in which a point's ring first takes its strength too.
 constexpr int stubborn_rounds = 10;
@@ -252,37 +291,42 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
   FoldLimitReport out;
   const std::size_t n = static_cast<std::size_t>(model.base.rows());
   const std::size_t width = static_cast<std::size_t>(ref.ring_size);
-  out.folded_before = find_folds(model, ref, edited, result, out.before);
+  // Everything below is kept by slot, as the reference is, so that a ring and its neighbours
+  // are read from the cache; the result is written back by point at the end.
+  Points r_by_slot = in_slot_order(result, ref);
+  Points edited_by_slot;
+  if (edited) edited_by_slot = in_slot_order(*edited, ref);
+  const SlotRows r = by_slot(r_by_slot), e = by_slot(edited_by_slot);
+  const SlotRows* e_rows = edited ? &e : nullptr;
+  out.folded_before = folds_everywhere(ref, e_rows, r, out.before);
   out.after = out.before;
   out.folded_after = out.folded_before;
   if (out.folded_before == 0) return out;
 
-  // The two-way ring neighbours of i (its ring's members, and the points whose rings hold it):
-  // a symmetric neighbourhood, so that widening and averaging spread alike in every direction.
-  auto each_neighbour = [&](Index i, auto&& visit) {
-    const std::size_t s = static_cast<std::size_t>(ref.slot[static_cast<std::size_t>(i)]);
-    const Index* ring = ref.rings.data() + s * width;
-    for (std::size_t m = 1; m < width; ++m) visit(ref.order[static_cast<std::size_t>(ring[m])]);
-    for (Index k = ref.in_offsets[s]; k < ref.in_offsets[s + 1]; ++k)
-      visit(ref.order[static_cast<std::size_t>(ref.in_rings[static_cast<std::size_t>(k)])]);
+  // The two-way ring neighbours of slot s (its ring's members, and the slots whose rings hold
+  // it): a symmetric neighbourhood, so that widening and averaging spread alike in every direction.
+  auto each_neighbour = [&](Index s, auto&& visit) {
+    const std::size_t us = static_cast<std::size_t>(s);
+    const Index* ring = ref.rings.data() + us * width;
+    for (std::size_t m = 1; m < width; ++m) visit(ring[m]);
+    for (Index k = ref.in_offsets[us]; k < ref.in_offsets[us + 1]; ++k) visit(ref.in_rings[static_cast<std::size_t>(k)]);
   };
-  // Where the limiter pulls a point: its base, in the result's coordinates.
-  auto base_at = [&](Index i) -> Eigen::RowVector3d {
-    return edited ? Eigen::RowVector3d(edited->row(i)) : Eigen::RowVector3d(model.base.row(i) + origin.transpose());
+  // Where the limiter pulls a slot's point: its base, in the result's coordinates.
+  auto base_at = [&](Index s) -> Eigen::RowVector3d {
+    return edited ? Eigen::RowVector3d(edited_by_slot.row(s)) : Eigen::RowVector3d(ref.base.row(s) + origin.transpose());
   };
-  std::vector<double>& lambda = out.limiter;
-  lambda.assign(n, 1.0);
-  // The limiter's layers: the strengths, `smoothing` widenings of them, then as many averagings;
-  // the last is 1 - lambda. A layer at a point reads the layer below at the point and its
+  // The limiter's layers, by slot: the strengths, `smoothing` widenings of them, then as many
+  // averagings; the last is 1 - lambda. A layer at a point reads the layer below at the point and its
   // neighbours only, so when strengths change, each layer changes only within one more ring
   // step of where the layer below changed: a round recomputes just that, and late rounds,
   // with few folds left, cost little.
   const int passes = 2 * options.smoothing;
-  std::vector<std::vector<double>> layer(static_cast<std::size_t>(passes) + 1, std::vector<double>(n, 0.0));
-  std::vector<double>& strength = layer.front();
-  std::vector<int> stamp(n, -1);  // the list-building step that last took each point
+  std::vector<ZeroedArray<double>> layer;
+  for (int k = 0; k <= passes; ++k) layer.emplace_back(n);
+  ZeroedArray<double>& strength = layer.front();
+  ZeroedArray<int> stamp(n);  // the list-building step that last took each slot (steps count from 1)
   int step_id = 0;
-  // A new list-building step into `list`: the returned function adds a point once per step.
+  // A new list-building step into `list`: the returned function adds a slot once per step.
   auto start_list = [&](IndexList& list) {
     ++step_id;
     list.clear();
@@ -292,11 +336,10 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
       list.push_back(j);
     };
   };
-  IndexList dirty, grown, check, folds;
-  const Points reconstructed = result;  // where each point's limiter scales from
-  std::vector<std::uint8_t> moved(n, 0);
+  IndexList dirty, grown, check, folds;  // slots
+  ZeroedArray<std::uint8_t> moved(n);
   for (std::size_t i = 0; i < n; ++i)
-    if (out.before[i] != fold_none) folds.push_back(static_cast<Index>(i));
+    if (out.before[i] != fold_none) folds.push_back(ref.slot[i]);
 
   // A point that still folds once its own gain is all but gone folds because of its ring: the
   // averaging leaves each ring member a share of its gain (about 1% on a sharp CAD edge), and on
@@ -307,6 +350,11 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
   for (int k = 0; k < stubborn_rounds; ++k) stubborn = 1.0 - options.step * (1.0 - stubborn);
   while (!folds.empty() && out.rounds < options.max_rounds) {
     ++out.rounds;
+    // In point order, whatever order the tests found them in: a stubborn fold hands on the
+    // strength it holds when its turn comes, which a fold before it may have raised.
+    std::sort(folds.begin(), folds.end(), [&](Index x, Index y) {
+      return ref.order[static_cast<std::size_t>(x)] < ref.order[static_cast<std::size_t>(y)];
+    });
     for (Index f : folds) {
       double& w = strength[static_cast<std::size_t>(f)];
       w = 1.0 - options.step * (1.0 - w);
@@ -315,28 +363,32 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
     // (widening) or the mean (averaging) of each point and its neighbours, the mean adding up
     // in the neighbours' order, so that it is the same sum wherever it is recomputed.
     {
-      const auto add = start_list(dirty);  // each point once: with smoothing 0 dirty is written to as it is
+      const auto add = start_list(dirty);  // each slot once: with smoothing 0 dirty is written to as it is
       for (Index f : folds) add(f);
       for (Index f : folds) {
         const double w = strength[static_cast<std::size_t>(f)];
         if (w < stubborn) continue;
-        const Index* ring = ref.rings.data() + static_cast<std::size_t>(ref.slot[static_cast<std::size_t>(f)]) * width;
+        const Index* ring = ref.rings.data() + static_cast<std::size_t>(f) * width;
         for (std::size_t m = 1; m < width; ++m) {
-          const Index j = ref.order[static_cast<std::size_t>(ring[m])];
+          const Index j = ring[m];
           double& wj = strength[static_cast<std::size_t>(j)];
           if (wj < w) { wj = w; add(j); }
         }
       }
     }
+    // A layer changes where the one below changed (dirty) and at their neighbours. The
+    // neighbours of the slots a pass took beyond its own dirty ones (its frontier) are all the
+    // next pass must add: the others' neighbours it already took.
+    std::size_t frontier = 0;  // where the frontier starts in dirty: all of it on the first pass
     for (int k = 1; k <= passes; ++k) {
       const bool largest = k <= options.smoothing;
       const auto take = start_list(grown);
-      for (Index i : dirty) {
-        take(i);
-        each_neighbour(i, take);
-      }
-      const std::vector<double>& below = layer[static_cast<std::size_t>(k - 1)];
-      std::vector<double>& into = layer[static_cast<std::size_t>(k)];
+      for (Index i : dirty) take(i);
+      const std::size_t taken = grown.size();
+      for (std::size_t t = frontier; t < dirty.size(); ++t) each_neighbour(dirty[t], take);
+      frontier = taken;
+      const ZeroedArray<double>& below = layer[static_cast<std::size_t>(k - 1)];
+      ZeroedArray<double>& into = layer[static_cast<std::size_t>(k)];
       parallel_for(grown.size(), [&](std::size_t b, std::size_t e) {
         for (std::size_t t = b; t < e; ++t) {
           const Index j = grown[t];
@@ -352,43 +404,53 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
       }, {}, 512);
       dirty.swap(grown);
     }
-    // The points whose limiter may have changed, from their reconstructed rows.
-    const std::vector<double>& field = layer.back();
+    // The points whose limiter may have changed, from their reconstructed rows (the result
+    // keeps them until the end).
+    const ZeroedArray<double>& field = layer.back();
     parallel_for(dirty.size(), [&](std::size_t b, std::size_t e) {
       for (std::size_t t = b; t < e; ++t) {
-        const Index i = dirty[t];
-        const std::size_t ui = static_cast<std::size_t>(i);
-        lambda[ui] = 1.0 - field[ui];
-        const Eigen::RowVector3d original = reconstructed.row(i);
-        const Eigen::RowVector3d base = base_at(i);
-        const Eigen::RowVector3d now = lambda[ui] == 1.0 ? original : Eigen::RowVector3d(base + lambda[ui] * (original - base));
-        moved[ui] = (now.array() != result.row(i).array()).any() ? 1 : 0;
-        result.row(i) = now;
+        const Index s = dirty[t];
+        const std::size_t us = static_cast<std::size_t>(s);
+        const double lambda = 1.0 - field[us];
+        const Eigen::RowVector3d original = result.row(ref.order[us]);
+        const Eigen::RowVector3d base = base_at(s);
+        const Eigen::RowVector3d now = lambda == 1.0 ? original : Eigen::RowVector3d(base + lambda * (original - base));
+        moved[us] = (now.array() != r_by_slot.row(s).array()).any() ? 1 : 0;
+        r_by_slot.row(s) = now;
       }
     }, {}, 4096);
     // Test again every point that moved or whose ring holds one that moved: no other point's
     // folds can have changed.
     const auto take = start_list(check);
-    for (Index i : dirty) {
-      const std::size_t ui = static_cast<std::size_t>(i);
-      if (!moved[ui]) continue;
-      take(i);
-      const std::size_t s = static_cast<std::size_t>(ref.slot[ui]);
-      for (Index k = ref.in_offsets[s]; k < ref.in_offsets[s + 1]; ++k)
-        take(ref.order[static_cast<std::size_t>(ref.in_rings[static_cast<std::size_t>(k)])]);
+    for (Index s : dirty) {
+      const std::size_t us = static_cast<std::size_t>(s);
+      if (!moved[us]) continue;
+      take(s);
+      for (Index k = ref.in_offsets[us]; k < ref.in_offsets[us + 1]; ++k) take(ref.in_rings[static_cast<std::size_t>(k)]);
     }
-    folds_at(ref, edited, result, check, out.after);
+    folds_at(ref, e_rows, r, check, out.after);
     // Folds left: among the tested points, and the folds of this round that were not tested
     // (their limiter and their rings did not move: one stronger fold beside them sets it).
     for (Index f : folds)
       if (stamp[static_cast<std::size_t>(f)] != step_id) check.push_back(f);
     folds.clear();
-    for (Index i : check)
-      if (out.after[static_cast<std::size_t>(i)] != fold_none) folds.push_back(i);
+    for (Index s : check)
+      if (out.after[static_cast<std::size_t>(ref.order[static_cast<std::size_t>(s)])] != fold_none) folds.push_back(s);
   }
+  // Back to point order: the limited rows (the others are as reconstructed), and the limiter.
+  out.limiter.resize(n);
+  const ZeroedArray<double>& field = layer.back();
+  parallel_for(n, [&](std::size_t b, std::size_t e) {
+    for (std::size_t s = b; s < e; ++s) {
+      const Index i = ref.order[s];
+      const double lambda = 1.0 - field[s];
+      out.limiter[static_cast<std::size_t>(i)] = lambda;
+      if (lambda < 1.0) result.row(i) = r_by_slot.row(static_cast<Eigen::Index>(s));
+    }
+  }, {}, 16384);
   out.folded_after = n - static_cast<std::size_t>(std::count(out.after.begin(), out.after.end(), std::uint8_t(fold_none)));
   out.capped = out.folded_after > 0;
-  out.changed = static_cast<std::size_t>(std::count_if(lambda.begin(), lambda.end(), [](double l) { return l < 1.0; }));
+  out.changed = static_cast<std::size_t>(std::count_if(out.limiter.begin(), out.limiter.end(), [](double l) { return l < 1.0; }));
   return out;
 }
 
