@@ -89,12 +89,32 @@ inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std:
     const double u0 = d0.dot(t1), u1 = d0.dot(t2);
     mr0 += u0 * dr;
     mr1 += u1 * dr;
-    mb0 += u0 * db;
-    mb1 += u1 * db;
+    if (edited) {  // the stored base's plane is the reference's
+      mb0 += u0 * db;
+      mb1 += u1 * db;
+    }
   }
-  const Vec3 nr = mr0.cross(mr1), nb = mb0.cross(mb1);
+  const Vec3 nr = mr0.cross(mr1);
+  const Vec3 nb = edited ? Vec3(mb0.cross(mb1)) : Vec3(ref.base_planes.row(s).transpose());
   if (reversed(nr, nb) && !((exempt | skip) & 1u)) kind |= fold_turned;
   return kind;
+}
+
+// M_b0 x M_b1 of fold_kind on the stored base (no edit) at slot s, summed as fold_kind sums it.
+Vec3 base_plane(const FoldReference& ref, std::uint16_t skip, Index s) {
+  const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
+  Vec3 t1, t2;
+  tangents(ref.normals.row(s).transpose(), t1, t2);
+  const Vec3 bi = ref.base.row(s).transpose();
+  Vec3 mb0 = Vec3::Zero(), mb1 = Vec3::Zero();
+  for (int m = 1; m < ref.ring_size; ++m) {
+    if ((skip >> m) & 1u) continue;
+    const Vec3 d0 = ref.base.row(ring[m]).transpose() - bi;
+    const double u0 = d0.dot(t1), u1 = d0.dot(t2);
+    mb0 += u0 * d0;
+    mb1 += u1 * d0;
+  }
+  return mb0.cross(mb1);
 }
 
 // Whether the stored base's ring at slot s spreads along one line only (its tangent spread
@@ -159,6 +179,7 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input) 
   ref.base = in_slot_order(model.base, ref);
   ref.normals = in_slot_order(model.base_normals, ref);
   ref.other_sheet.assign(n, 0);
+  ref.base_planes.resize(static_cast<Eigen::Index>(n), 3);
   Points input_by_slot;
   if (input) {
     ref.exempt.assign(n, 0);
@@ -175,6 +196,7 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input) 
           skip |= static_cast<std::uint16_t>(1u << m);
       if (ring_on_a_line(ref, skip, static_cast<Index>(t))) skip |= 1u;
       ref.other_sheet[t] = skip;
+      ref.base_planes.row(static_cast<Eigen::Index>(t)) = base_plane(ref, skip, static_cast<Index>(t)).transpose();
       if (input) ref.exempt[t] = folding_bits(ref, skip, in, static_cast<Index>(t));
     }
   }, {}, 4096);

@@ -31,6 +31,8 @@ struct FoldReference {
                                            // itself first
   int ring_size = 0;
   Points base, normals;                    // #P by 3, by slot: the stored base and its normals
+  Points base_planes;                      // #P by 3, by slot: the stored base's ring plane, M_b0 x M_b1 of
+                                           // find_folds with the stored base (no edit), as find_folds sums it
   std::vector<std::uint16_t> other_sheet;  // #P, by slot: members whose stored base normal faces away (n_i . n_j <= 0),
                                            // and bit 0 where the stored ring lies on a line (no plane test)
   std::vector<std::uint16_t> exempt;       // #P, by slot: edges (bit m) and planes (bit 0) that already fold in
