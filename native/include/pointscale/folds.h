@@ -115,8 +115,10 @@ struct FoldLimitReport {
 // a tenth round, its own gain all but gone, gives its strength to its ring's members too (the
 // averaging leaves them a share of their gain, which keeps a fold on a ring with hardly any
 // plane); they then count as folds of that strength, so around it the limiter reaches one ring
-// step further, and a member that folds as well hands the strength on at once. Points farther
-// than that from every fold are not written to: they keep their result bit for bit.
+// step further, and a member that folds as well hands the strength on at once (the folds are
+// visited in point order each round, so the strengths handed on are the same on any number of
+// threads). Points farther than that from every fold are not written to: they keep their
+// result bit for bit.
 //
 // edited  as for find_folds, in the result's coordinates; origin: the stored base's offset
 //         from them (the result's coordinates = the model's + origin), used when edited is null
