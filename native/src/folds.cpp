@@ -66,9 +66,45 @@ Points in_slot_order(const Eigen::Ref<const Points>& a, const FoldReference& ref
 
 SlotRows by_slot(const Points& a) { return SlotRows{a.data(), 3, nullptr}; }
 
+// A result and the base it was built on (null: the stored one), copied into slot order.
+struct InSlotOrder {
+  Points result, edited;
+  SlotRows r, e;
+  const SlotRows* e_rows;  // null for the stored base
+  InSlotOrder(const Eigen::Ref<const Points>& result_, const Points* edited_, const FoldReference& ref)
+      : result(in_slot_order(result_, ref)),
+        edited(edited_ ? in_slot_order(*edited_, ref) : Points()),
+        r(by_slot(result)),
+        e(by_slot(edited)),
+        e_rows(edited_ ? &e : nullptr) {}
+  InSlotOrder(const InSlotOrder&) = delete;  // r and e point into the copies
+  InSlotOrder& operator=(const InSlotOrder&) = delete;
+};
+
+// M_x0 x M_x1 at slot s (folds.h): the plane of x (#P by 3, by slot) over the ring's members
+// that skip leaves in, with the stored base's tangent coordinates.
+Vec3 ring_plane(const FoldReference& ref, std::uint16_t skip, const SlotRows& x, Index s) {
+  const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
+  Vec3 t1, t2;
+  tangents(ref.normals.row(s).transpose(), t1, t2);
+  const Vec3 bi = ref.base.row(s).transpose(), xi = x(s);
+  Vec3 m0 = Vec3::Zero(), m1 = Vec3::Zero();
+  for (int m = 1; m < ref.ring_size; ++m) {
+    if ((skip >> m) & 1u) continue;
+    const Index j = ring[m];
+    const Vec3 d0 = ref.base.row(j).transpose() - bi;
+    const Vec3 dx = x(j) - xi;
+    const double u0 = d0.dot(t1), u1 = d0.dot(t2);
+    m0 += u0 * dx;
+    m1 += u1 * dx;
+  }
+  return m0.cross(m1);
+}
+
 // The FoldKind bits of slot s (folds.h has the definitions). skip: ring members left out of
 // both tests, and bit 0 the plane test on a ring with no plane; exempt: edges left out of the
-// crossing test, and bit 0 the plane test.
+// crossing test, and bit 0 the plane test. The stored base's plane is the reference's
+// (base_planes); an edited base's is summed here.
 inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std::uint16_t exempt, const SlotRows* edited,
                               const SlotRows& r, Index s) {
   const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
@@ -77,7 +113,9 @@ inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std:
   const Vec3 bi = ref.base.row(s).transpose();
   const Vec3 ri = r(s);
   const Vec3 ei = edited ? (*edited)(s) : Vec3::Zero();
-  Vec3 mr0 = Vec3::Zero(), mr1 = Vec3::Zero(), mb0 = Vec3::Zero(), mb1 = Vec3::Zero();
+  // The result's plane is summed in the same pass as the crossing test: ring_plane's sums,
+  // without reading the ring twice.
+  Vec3 mr0 = Vec3::Zero(), mr1 = Vec3::Zero();
   std::uint8_t kind = fold_none;
   for (int m = 1; m < ref.ring_size; ++m) {
     if ((skip >> m) & 1u) continue;
@@ -89,32 +127,11 @@ inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std:
     const double u0 = d0.dot(t1), u1 = d0.dot(t2);
     mr0 += u0 * dr;
     mr1 += u1 * dr;
-    if (edited) {  // the stored base's plane is the reference's
-      mb0 += u0 * db;
-      mb1 += u1 * db;
-    }
   }
   const Vec3 nr = mr0.cross(mr1);
-  const Vec3 nb = edited ? Vec3(mb0.cross(mb1)) : Vec3(ref.base_planes.row(s).transpose());
+  const Vec3 nb = edited ? ring_plane(ref, skip, *edited, s) : Vec3(ref.base_planes.row(s).transpose());
   if (reversed(nr, nb) && !((exempt | skip) & 1u)) kind |= fold_turned;
   return kind;
-}
-
-// M_b0 x M_b1 of fold_kind on the stored base (no edit) at slot s, summed as fold_kind sums it.
-Vec3 base_plane(const FoldReference& ref, std::uint16_t skip, Index s) {
-  const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
-  Vec3 t1, t2;
-  tangents(ref.normals.row(s).transpose(), t1, t2);
-  const Vec3 bi = ref.base.row(s).transpose();
-  Vec3 mb0 = Vec3::Zero(), mb1 = Vec3::Zero();
-  for (int m = 1; m < ref.ring_size; ++m) {
-    if ((skip >> m) & 1u) continue;
-    const Vec3 d0 = ref.base.row(ring[m]).transpose() - bi;
-    const double u0 = d0.dot(t1), u1 = d0.dot(t2);
-    mb0 += u0 * d0;
-    mb1 += u1 * d0;
-  }
-  return mb0.cross(mb1);
 }
 
 // Whether the stored base's ring at slot s spreads along one line only (its tangent spread
@@ -196,7 +213,7 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input) 
           skip |= static_cast<std::uint16_t>(1u << m);
       if (ring_on_a_line(ref, skip, static_cast<Index>(t))) skip |= 1u;
       ref.other_sheet[t] = skip;
-      ref.base_planes.row(static_cast<Eigen::Index>(t)) = base_plane(ref, skip, static_cast<Index>(t)).transpose();
+      ref.base_planes.row(static_cast<Eigen::Index>(t)) = ring_plane(ref, skip, by_slot(ref.base), static_cast<Index>(t)).transpose();
       if (input) ref.exempt[t] = folding_bits(ref, skip, in, static_cast<Index>(t));
     }
   }, {}, 4096);
@@ -241,11 +258,8 @@ std::size_t folds_everywhere(const FoldReference& ref, const SlotRows* edited, c
 std::size_t find_folds(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
                        Eigen::Ref<const Points> result, std::vector<std::uint8_t>& kind) {
   check_folds_input(model, ref, edited, result);
-  const Points r_by_slot = in_slot_order(result, ref);
-  Points edited_by_slot;
-  if (edited) edited_by_slot = in_slot_order(*edited, ref);
-  const SlotRows r = by_slot(r_by_slot), e = by_slot(edited_by_slot);
-  return folds_everywhere(ref, edited ? &e : nullptr, r, kind);
+  const InSlotOrder rows(result, edited, ref);
+  return folds_everywhere(ref, rows.e_rows, rows.r, kind);
 }
 
 namespace {
@@ -315,11 +329,10 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
   const std::size_t width = static_cast<std::size_t>(ref.ring_size);
   // Everything below is kept by slot, as the reference is, so that a ring and its neighbours
   // are read from the cache; the result is written back by point at the end.
-  Points r_by_slot = in_slot_order(result, ref);
-  Points edited_by_slot;
-  if (edited) edited_by_slot = in_slot_order(*edited, ref);
-  const SlotRows r = by_slot(r_by_slot), e = by_slot(edited_by_slot);
-  const SlotRows* e_rows = edited ? &e : nullptr;
+  InSlotOrder rows(result, edited, ref);
+  Points& r_by_slot = rows.result;  // limited in place, written back by point at the end
+  const SlotRows& r = rows.r;
+  const SlotRows* e_rows = rows.e_rows;
   out.folded_before = folds_everywhere(ref, e_rows, r, out.before);
   out.after = out.before;
   out.folded_after = out.folded_before;
@@ -335,7 +348,7 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
   };
   // Where the limiter pulls a slot's point: its base, in the result's coordinates.
   auto base_at = [&](Index s) -> Eigen::RowVector3d {
-    return edited ? Eigen::RowVector3d(edited_by_slot.row(s)) : Eigen::RowVector3d(ref.base.row(s) + origin.transpose());
+    return edited ? Eigen::RowVector3d(rows.edited.row(s)) : Eigen::RowVector3d(ref.base.row(s) + origin.transpose());
   };
   // The limiter's layers, by slot: the strengths, `smoothing` widenings of them, then as many
   // averagings; the last is 1 - lambda. A layer at a point reads the layer below at the point and its
