@@ -3,12 +3,72 @@
 
 #include <utility>
 
+#include <Eigen/Geometry>
+
 #include "pointscale/parallel.h"
 #include "pointscale/detail/level_normals.h"
 #include "pointscale/detail/transported_rotations.h"
 #include "pointscale/detail/reconstruct_levels.h"
 
 namespace pointscale {
+
+namespace {
+
+struct HangFromFoot {
+  Eigen::Index point;
+  Vec3 base;   // the point's edited base position
+  Vec3 shift;  // what hanging it from its foot rigidly would add
+};
+
+std::vector<HangFromFoot> hang_from_feet(const Points& original, const Points& edited, const IndexList& feet,
+                                         const std::vector<Mat3>& rotation) {
+  constexpr std::size_t chunk = 16384;
+  std::vector<std::vector<HangFromFoot>> found((feet.size() + chunk - 1) / chunk);
+  parallel_for(feet.size(), [&](std::size_t b, std::size_t e) {
+    std::vector<HangFromFoot>& out = found[b / chunk];
+    for (std::size_t ii = b; ii < e; ++ii) {
+      const Index f = feet[ii];
+      if (f == static_cast<Index>(ii)) continue;
+      const Eigen::Index i = static_cast<Eigen::Index>(ii);
+      const Vec3 base = original.row(i).transpose(), base_edited = edited.row(i).transpose();
+      const Vec3 foot = original.row(f).transpose(), foot_edited = edited.row(f).transpose();
+      const Mat3& turn = rotation[static_cast<std::size_t>(f)];
+      const Vec3 span = base - foot;
+      const Vec3 shift = (foot_edited - foot) - (base_edited - base) + (turn * span - span);
+      // Nothing moved here: the identity, exactly, so a local edit leaves the rest as it was.
+      if (shift.x() == 0.0 && shift.y() == 0.0 && shift.z() == 0.0) continue;
+      out.push_back({i, base_edited, shift});
+    }
+  }, {}, chunk);
+  std::vector<HangFromFoot> all;
+  for (std::vector<HangFromFoot>& part : found) all.insert(all.end(), part.begin(), part.end());
+  return all;
+}
+
+// Turns each listed point's offset from its base position towards where hanging it from its
+// foot puts it, keeping its length, and every kept level and normal of it by the same turn.
+// A steep edit stretches the base along its slope, and the base positions of a tall feature's
+// top lie away from its foot: offsets hung from those positions would lean with the stretch.
+void turn_towards_feet(const std::vector<HangFromFoot>& hang, Points& p, Reconstruction* kept) {
+  parallel_for(hang.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t j = b; j < e; ++j) {
+      const HangFromFoot& h = hang[j];
+      const Vec3 w = p.row(h.point).transpose() - h.base;
+      const Vec3 v = w + h.shift;
+      if (!(w.norm() > 0.0) || !(v.norm() > 0.0)) continue;
+      const Mat3 q = Eigen::Quaterniond::FromTwoVectors(w, v).toRotationMatrix();
+      p.row(h.point) = (h.base + q * w).transpose();
+      if (!kept) continue;
+      for (std::size_t l = 1; l < kept->levels.size(); ++l) {
+        Points& level = kept->levels[l];
+        level.row(h.point) = (h.base + q * (level.row(h.point).transpose() - h.base)).transpose();
+      }
+      for (Points& n : kept->normals) n.row(h.point) = (q * n.row(h.point).transpose()).transpose();
+    }
+  }, {}, 4096);
+}
+
+}  // namespace
 
 EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p,
                                                bool edited, Reconstruction* kept, int upto,
@@ -27,6 +87,11 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
     edit_rotations(model.base, p, ws.edit.rings, ws.edit.ring_size, clusters, model.support[0].labels,
                    &ws.edit.planes, ws.rotation, &report);
   }
+  // Points whose detail stands on a foot other than their own base position: how far the edit
+  // moves the foot, less how far it moves their own base position, less the turn of the span
+  // between the two. Hanging the point from its foot rigidly would add exactly that.
+  std::vector<HangFromFoot> hang;
+  if (turned) hang = hang_from_feet(model.base, p, ws.edit.feet, ws.rotation);
   Points& fitted = turned ? ws.unedited : p;  // the level each level's normals are fitted to
   // Normals fitted once for these gains are reused (they do not depend on the edit).
   const bool cache = turned && ws.kept;
@@ -79,6 +144,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
     if (kept) { kept->levels.push_back(p); kept->normals.push_back(turned ? std::move(applied) : nrm); }
     previous = normals;
   }
+  if (!hang.empty()) turn_towards_feet(hang, p, kept);
   if (cache && !cached && upto == k) ws.unedited_gains = gains;
   if (cache) Points().swap(ws.unedited);  // only fitting needs it, and the normals are kept
   return report;

@@ -33,7 +33,8 @@ IndexList base_rings(const Points& base, const IndexList& parts = {}, int size =
 // is taken only within a quarter of the point's offset from its own base position, and only
 // where the base faces the same way (normals within 60 degrees): where the base curves inward
 // under tall detail the nearest base point can lie anywhere, and the point's own base position
-// is the better guess. Otherwise the point stands on its own base position.
+// is the better guess. Otherwise the point stands on its own base position. Reconstruction
+// turns a point by its foot's rotation and hangs it from its foot (reconstruction.cpp).
 // base, base_normals, finest  #P by 3; rings from base_rings(base, parts, edit_ring_size).
 // Returns #P base point indices.
 IndexList base_feet(const Points& base, const Points& base_normals, const Points& finest, const IndexList& rings,
