@@ -126,7 +126,7 @@ def cmd_decompose(args) -> None:
     with CommandProgress(stages) as progress, StagedOutput() as staged:
         progress.stage("reading")
         scan = io.read(args.input)
-        check_format_holds(extension, scan, args.input)
+        check_format_holds(extension, scan, args.input, shown=out / level_name(0, extension))
         start = time.perf_counter()
         try:
             dec = decompose(scan.points, levels=args.levels, decimation=args.decimation, kernel=args.kernel,
@@ -178,9 +178,9 @@ def cmd_reconstruct(args) -> None:
     with CommandProgress(stages) as progress, StagedOutput() as staged:
         progress.stage("reading")
         dec, source = read_decomposition(Path(args.decomposition))
-        gains = parse_gains(args.gains, dec.n_bands) if args.gains else None
+        gains = parse_gains(args.gains, dec.n_bands) if args.gains is not None else None  # "" is refused
         template = source if source is not None else io.Scan(points=dec.base)
-        check_format_holds(out.suffix.lower(), template, args.decomposition)
+        check_format_holds(out.suffix.lower(), template, args.decomposition, points=dec.base, shown=out)
         base = read_base(args.base, dec.n_points, source) if args.base else None
         points, reference = reconstruct_with_normals(dec, gains, base, args.threads, progress.stage("reconstructing"))
         if not np.isfinite(points).all():

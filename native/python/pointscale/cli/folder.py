@@ -18,7 +18,10 @@ from ..multiscale import load
 
 DECOMPOSITION_FILE = "decomposition.npz"
 SOURCE_FILE = "source.npz"
-_LEVEL_FILE = re.compile(r"^level_\d+\.[A-Za-z0-9]+$")
+# The level files decompose writes: level_N with N as level_name() spells it (no leading zeros) and
+# an extension it writes, in lower case as writable_extension() makes it. A user's level_1.txt or
+# level_12.png beside them looks alike but is not ours, and is neither counted nor removed.
+_LEVEL_FILE = re.compile(r"^level_(0|[1-9][0-9]*)(\.[a-z0-9]+)$")
 
 
 def level_name(level: int, extension: str) -> str:
@@ -29,9 +32,14 @@ def owned_files(folder: Path) -> list[Path]:
     """The files of an earlier decomposition in `folder`: what decomposing again replaces."""
     if not folder.is_dir():
         return []
-    names = [p for p in folder.iterdir() if p.is_file() and _LEVEL_FILE.match(p.name)]
+    names = [p for p in folder.iterdir() if p.is_file() and _is_level_file(p.name)]
     names += [folder / n for n in (DECOMPOSITION_FILE, SOURCE_FILE, "faces.npy") if (folder / n).is_file()]
     return sorted(names)
+
+
+def _is_level_file(name: str) -> bool:
+    match = _LEVEL_FILE.match(name)
+    return match is not None and match.group(2) in io.SUPPORTED_EXTENSIONS
 
 
 def model_file(path: Path) -> Path:

@@ -39,15 +39,44 @@ def detail_attribute_name(scan) -> str:
     return name
 
 
+NORMAL_NAMES = ("nx", "ny", "nz")
+
+
+def normal_attribute_names(scan) -> tuple[str, str, str] | None:
+    """None when the level's normals can go under nx, ny, nz; else, when the input keeps vertex
+    attributes of those names (a lone nx, quantised int16 normals, LAS extra bytes: anything
+    but a float triple, which the readers take as the normals), the first of (pointscale_nx,
+    pointscale_ny, pointscale_nz), (pointscale_nx_2, ...) ... the input lacks, as for detail."""
+    taken = scan.vertex_attributes
+    if not any(name in taken for name in NORMAL_NAMES):
+        return None
+    number = 1
+    while True:
+        suffix = "" if number == 1 else f"_{number}"
+        names = tuple(f"pointscale_{axis}{suffix}" for axis in NORMAL_NAMES)
+        if not any(name in taken for name in names):
+            return names
+        number += 1
+
+
 # Formats with room for a vertex scalar of our own; the others would drop the detail with a warning.
 FORMATS_WITH_VERTEX_SCALARS = (".ply", ".las", ".laz", ".xyz")
+# Formats that store normals as vertex properties named nx, ny, nz (the others, OBJ's vn or
+# OFF's NOFF columns, keep them apart from the attributes, which cannot clash with them).
+FORMATS_NAMING_NORMALS = (".ply", ".las", ".laz", ".xyz")
 
 
 def level_scan(template, points: np.ndarray, normals: np.ndarray, detail, extension: str):
     """`template`'s faces and attributes on new geometry, plus the band's detail as a vertex
-    scalar when given (the finest level has none) and the format `extension` can hold it."""
-    scan = template.with_geometry(points, normals)
+    scalar when given (the finest level has none) and the format `extension` can hold it. The
+    input's own attributes keep their names and values: the level's normals and detail go under
+    other names where the input already uses nx, ny, nz or detail."""
+    dtype = np.float64 if np.dtype(template.precision) == np.float64 else np.float32
+    renamed = normal_attribute_names(template) if extension in FORMATS_NAMING_NORMALS else None
+    scan = template.with_geometry(points, None if renamed else normals)
+    if renamed:
+        for axis, name in enumerate(renamed):
+            scan.vertex_attributes[name] = np.asarray(normals[:, axis], dtype=dtype)
     if detail is not None and extension in FORMATS_WITH_VERTEX_SCALARS:
-        dtype = np.float64 if np.dtype(template.precision) == np.float64 else np.float32
         scan.vertex_attributes[detail_attribute_name(template)] = np.asarray(detail, dtype=dtype)
     return scan

@@ -2,12 +2,14 @@
 from __future__ import annotations
 
 import tempfile
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from .. import io
 from .folder import owned_files
+from .level_files import level_scan
 
 
 def writable_extension(path: Path | str, what: str) -> str:
@@ -60,10 +62,38 @@ def check_output_file(out: Path, force: bool) -> None:
     _require_writable_folder(parent, out)
 
 
-def check_format_holds(extension: str, scan, name) -> None:
-    """Refuses, before any computing, an output format that cannot hold the model at all."""
+def check_format_holds(extension: str, scan, name, points=None, shown=None) -> None:
+    """Refuses, before any computing, an output format that cannot hold the model at all, or
+    the input's attributes under their names and types (a LAS field 'my field' in PLY, a
+    column named twice in XYZ): a few of its vertices are written as a level would be, to a
+    scratch folder. `points` (n, 3) stand in for the scan's own (NaN in a source.npz); `shown`
+    is the output file named in the error."""
     if extension == ".stl" and scan.n_faces == 0:
         raise ValueError(f"STL stores triangles and {name} has no faces; write .ply, .las or .xyz instead")
+    trial = _few_vertices(scan, scan.points if points is None else points)
+    normals = np.tile([0.0, 0.0, 1.0], (trial.n_points, 1))
+    with tempfile.TemporaryDirectory() as scratch, warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the real writes warn; this one must not warn twice
+        path = Path(scratch) / f"trial{extension}"
+        try:
+            io.write(path, level_scan(trial, trial.points, normals, np.zeros(trial.n_points), extension))
+        except ValueError as exc:
+            raise ValueError(str(exc).replace(str(path), str(shown or f"the {extension} output"))) from None
+
+
+def _few_vertices(scan, points: np.ndarray, count: int = 8):
+    """The first `count` vertices of scan with their attributes, or the first face's vertices and
+    that face (renumbered) with its attributes: a scan small enough to write in no time."""
+    if scan.n_faces:
+        face = np.asarray(scan.faces[0])
+        keep = np.unique(face)
+        faces = np.searchsorted(keep, face)[None, :]
+        face_attributes = {k: v[:1] for k, v in scan.face_attributes.items()}
+    else:
+        keep, faces, face_attributes = np.arange(min(count, scan.n_points)), None, {}
+    return io.Scan(points=points[keep], precision=scan.precision,
+                   vertex_attributes={k: v[keep] for k, v in scan.vertex_attributes.items()},
+                   faces=faces, face_attributes=face_attributes, format_info=scan.format_info)
 
 
 def read_base(path: str, n_points: int, source):

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 
 from .. import __version__
 
@@ -21,11 +22,18 @@ class _Formatter(argparse.HelpFormatter):
         return text
 
 
+# What a signed value starts with: -1, -.5, -inf, -nan (not another option such as -o or --threads).
+_SIGNED_VALUE = re.compile(r"^-(\d|\.\d|inf|nan)", re.IGNORECASE)
+
+
 def join_signed_values(argv: list[str]) -> list[str]:
+    """argv with each OPTIONS_WITH_SIGNED_VALUES option and a value after it that starts with a
+    minus sign as one "--gains=-1,1,1" word. A following option is left alone, so that
+    "--gains --threads 1" is reported as a --gains without its value."""
     out = []
     i = 0
     while i < len(argv):
-        if argv[i] in OPTIONS_WITH_SIGNED_VALUES and i + 1 < len(argv):
+        if argv[i] in OPTIONS_WITH_SIGNED_VALUES and i + 1 < len(argv) and _SIGNED_VALUE.match(argv[i + 1]):
             out.append(f"{argv[i]}={argv[i + 1]}")
             i += 2
         else:

@@ -4,7 +4,8 @@ A LAS file keeps its header's scales, offsets, point format and version, every p
 field (as vertex attributes named as laspy names them: intensity, return_number, classification,
 gps_time, red, ...), its extra bytes and its VLRs/EVLRs (the CRS lives there), so that writing
 the Scan back gives the same kind of file. Normals, which LAS has no field for, are stored as
-extra bytes nx, ny, nz (float32 unless the file had another type).
+extra bytes nx, ny, nz (float32 unless the file had float64). Only float extra bytes nx, ny, nz
+are read as normals; others of those names (a lone nx, uint8 nx, ny, nz) are the user's fields.
 
 A Scan from another format is written as LAS 1.4, point format 7 when it has red/green/blue
 (8-bit colours are scaled by 257 to LAS's 16 bits) and 6 otherwise; the offset is the bounding
@@ -63,7 +64,9 @@ def read_las(path) -> Scan:
     if not np.isfinite(points).all():
         raise ValueError(f"{path}: non-finite coordinates")
     normals = None
-    if all(n in extra for n in NORMAL_NAMES):
+    # Only float extra bytes nx, ny, nz are normals; a lone nx or uint8 nx, ny, nz are the user's
+    # own fields, kept unchanged as attributes.
+    if all(n in extra and _is_float_scalar(extra[n]) for n in NORMAL_NAMES):
         normals = np.column_stack([attributes.pop(n) for n in NORMAL_NAMES]).astype(np.float64)
         info["normal_type"] = np.dtype(extra["nx"].dtype).str[1:]
     try:
@@ -71,6 +74,11 @@ def read_las(path) -> Scan:
                     format_info=info)
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
+
+
+def _is_float_scalar(dimension) -> bool:
+    dtype = np.dtype(dimension.dtype)
+    return dtype.kind == "f" and dtype.shape == () and dimension.scales is None and dimension.offsets is None
 
 
 def _read_records(laspy, path: str):
@@ -183,6 +191,9 @@ def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy):
     values, params = {}, []
     declared = {d["name"]: d for d in info.get("extra_dimensions", [])}
     if scan.normals is not None:
+        clash = [name for name in NORMAL_NAMES if name in attributes]
+        if clash:  # the user's own values under those names would be overwritten
+            raise ValueError(f"vertex attribute {clash[0]!r} clashes with the normals (extra bytes nx, ny, nz)")
         for i, name in enumerate(NORMAL_NAMES):
             attributes[name] = scan.normals[:, i].astype(info.get("normal_type", "f4"))
     foreign = not info

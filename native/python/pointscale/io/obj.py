@@ -1,4 +1,4 @@
-"""Wavefront OBJ, parsed with numpy: v (with optional r g b colours), vt, vn and f lines.
+"""Wavefront OBJ, parsed with numpy: v (with optional w, or r g b [a] colours), vt, vn and f lines.
 
 trimesh's OBJ loader was not used: even with maintain_order it drops vertices no face uses (a
 point cloud with a few faces loses points) and returns UVs only when it can load the material.
@@ -9,8 +9,11 @@ corners disagree (a UV seam) keeps its first corner's value, with a warning. Pol
 they are (no triangulation). Negative (relative) indices are resolved against the counts at the
 end of the file, which is exact when all vertices come before the faces, as in nearly every file.
 Groups, objects, materials and lines (l) are not kept. Read, UVs are the vertex attributes
-texture_u, texture_v and colours red, green, blue as the file's floats (0..1 by convention);
-written, 8- and 16-bit integer colours (from PLY or LAS) are divided by 255 or 65535.
+texture_u, texture_v (and texture_w of "vt u v w"), colours red, green, blue (and alpha of
+"v x y z r g b a") as the file's floats (0..1 by convention), and the w of "v x y z w" is
+vertex_w; each is written back in its place. Written, 8- and 16-bit integer colours (from PLY or
+LAS) are divided by 255 or 65535; alpha from other formats is not written (most readers take
+only 6 values on a v line), with a warning like any attribute OBJ has no place for.
 """
 from __future__ import annotations
 
@@ -25,6 +28,9 @@ from .scan import Scan
 from .text_tables import colour_for_text, numbers, polygons, read_text, savetxt, write_rows
 
 _COLOURS = ("red", "green", "blue")
+# The values of a v line after x y z, by its width: the weight w, or a colour (with alpha).
+_V_EXTRAS = {3: (), 4: ("vertex_w",), 6: _COLOURS, 7: _COLOURS + ("alpha",)}
+_TEXTURE_NAMES = ("texture_u", "texture_v", "texture_w")
 _UV_NAMES = (("texture_u", "texture_v"), ("s", "t"), ("u", "v"))
 
 
@@ -39,16 +45,16 @@ def read_obj(path) -> Scan:
     points = v[:, :3]
     if not np.isfinite(points).all():
         raise ValueError(f"{path}: non-finite coordinates")
-    attributes = {}
-    if v.shape[1] >= 6:
-        attributes.update({c: v[:, 3 + i].copy() for i, c in enumerate(_COLOURS)})
+    attributes = {name: v[:, 3 + i].copy() for i, name in enumerate(_V_EXTRAS[v.shape[1]])}
     vn = numbers(lines["vn"], "vn", path)
     vt = numbers(lines["vt"], "vt", path)
     faces, corner_vt, corner_vn = _faces(lines["f"], len(v), len(vt), len(vn), path)
     normals = _per_vertex(vn[:, :3] if len(vn) else vn, faces, corner_vn, len(v), "normals", path)
-    uv = _per_vertex(vt[:, :2] if len(vt) else vt, faces, corner_vt, len(v), "UVs", path)
+    if vt.shape[1] > len(_TEXTURE_NAMES):
+        raise ValueError(f"{path}: vt lines have {vt.shape[1]} values; expected u [v [w]]")
+    uv = _per_vertex(vt, faces, corner_vt, len(v), "UVs", path)
     if uv is not None:
-        attributes["texture_u"], attributes["texture_v"] = uv[:, 0].copy(), uv[:, 1].copy()
+        attributes.update({name: uv[:, i].copy() for i, name in enumerate(_TEXTURE_NAMES[:uv.shape[1]])})
     try:
         return Scan(points=points, precision=np.float64, normals=normals, vertex_attributes=attributes,
                     faces=faces, format_info={"format": "obj"})
@@ -62,11 +68,13 @@ def write_obj(path, scan: Scan) -> None:
     path = os.fspath(path)
     attributes = scan.vertex_attributes
     kept = []
-    vertex = scan.points
-    if all(c in attributes for c in _COLOURS):
-        vertex = np.column_stack([vertex] + [colour_for_text(attributes[c]) for c in _COLOURS])
-        kept += list(_COLOURS)
+    vertex_extras = _vertex_extras(scan)
+    vertex = np.column_stack([scan.points] + [colour_for_text(attributes[c]) if c in _COLOURS + ("alpha",)
+                                              else attributes[c] for c in vertex_extras])
+    kept += vertex_extras
     uv_names = next((pair for pair in _UV_NAMES if all(n in attributes for n in pair)), None)
+    if uv_names == _TEXTURE_NAMES[:2] and "texture_w" in attributes:
+        uv_names = _TEXTURE_NAMES  # vt u v w, as read
     kept += list(uv_names or ())
     dropped = [n for n in attributes if n not in kept] + list(scan.face_attributes)
     if dropped:
@@ -91,6 +99,16 @@ def write_obj(path, scan: Scan) -> None:
     with atomic_write(path) as temporary:
         with open(temporary, "w", encoding="utf-8") as f:
             f.write(buffer.getvalue())
+
+
+def _vertex_extras(scan: Scan) -> tuple:
+    """The attributes a v line carries after x y z: red green blue (and alpha, when it came from
+    an OBJ's 7-value v lines: other tools read only 6), or the weight vertex_w, or none."""
+    attributes = scan.vertex_attributes
+    if all(c in attributes for c in _COLOURS):
+        with_alpha = "alpha" in attributes and scan.format_info.get("format") == "obj"
+        return _V_EXTRAS[7] if with_alpha else _V_EXTRAS[6]
+    return _V_EXTRAS[4] if "vertex_w" in attributes else ()
 
 
 def _lines(path: str) -> dict:

@@ -116,7 +116,7 @@ def _scan_of(ply: PlyData, path: str) -> Scan:
     info = {"format": "ply", "text": bool(ply.text), "byte_order": ply.byte_order,
             "comments": list(ply.comments), "obj_info": list(ply.obj_info),
             "vertex_properties": [p.name for p in vertex.properties], "list_lengths": {}}
-    if set(NORMALS) <= set(props):
+    if _float_triple(data, props, NORMALS):
         normals = np.column_stack([data[c] for c in NORMALS]).astype(np.float64)
         info["normal_dtype"] = _code(np.result_type(*(data[c].dtype for c in NORMALS)))
     skip = set(COORDINATES) | (set(NORMALS) if normals is not None else set())
@@ -142,6 +142,14 @@ def _scan_of(ply: PlyData, path: str) -> Scan:
                     faces=faces, face_attributes=face_attributes, format_info=info)
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
+
+
+def _float_triple(data: np.ndarray, props: dict, names: tuple) -> bool:
+    """Whether the vertices have all three of names as float scalars: only then are nx, ny, nz
+    the normals. Anything else under those names (a lone nx, int16 quantised normals) is the
+    user's data, kept unchanged as vertex attributes; unit normals written into int16 would be 0."""
+    return all(n in props and not isinstance(props[n], PlyListProperty) and data[n].dtype.kind == "f"
+               for n in names)
 
 
 def _properties(element, skip: set, list_lengths: dict, path: str, prefix: str = "") -> dict:
@@ -193,6 +201,10 @@ def _face_element(scan: Scan, info: dict):
     index = info.get("face_index", {})
     name = index.get("name", "vertex_indices")
     val = np.dtype(index.get("val_dtype", "i4"))
+    # The file's own index type (uchar for a small mesh) may not reach this scan's vertices:
+    # widen it rather than let astype wrap index 300 to 44.
+    if np.iinfo(val).max < scan.n_points - 1:
+        val = np.dtype(np.int32 if scan.n_points - 1 <= np.iinfo(np.int32).max else np.uint32)
     if isinstance(scan.faces, np.ndarray):
         faces = scan.faces.astype(val)
     else:
@@ -217,7 +229,8 @@ def _element(name: str, columns: dict, list_lengths: dict, val_types=None):
     data = np.empty(count, dtype=fields)
     for k, v in columns.items():
         data[k] = v
-    len_types = {k: _code(list_lengths.get(k, "u1")) for k, v in columns.items() if v.dtype == object or v.ndim == 2}
+    len_types = {k: _count_type(list_lengths.get(k, "u1"), _longest_list(v))
+                 for k, v in columns.items() if v.dtype == object or v.ndim == 2}
     element = PlyElement.describe(data, name, len_types=len_types,
                                   val_types={k: _code(v) for k, v in (val_types or {}).items()})
 
@@ -238,6 +251,23 @@ def _element(name: str, columns: dict, list_lengths: dict, val_types=None):
         return records
 
     return element, (None if ragged else packed), columns
+
+
+def _count_type(preferred, longest: int) -> str:
+    """The list-length type for lists of up to `longest` values: `preferred` (the file's own, or
+    uchar) when it holds that count, else the narrowest unsigned type that does. A uchar count of
+    300 would be written as 44 and misalign every record after it."""
+    preferred = np.dtype(preferred)
+    if preferred.kind in "iu" and longest <= np.iinfo(preferred).max:
+        return _code(preferred)
+    return next(_code(t) for t in (np.uint8, np.uint16, np.uint32) if longest <= np.iinfo(t).max)
+
+
+def _longest_list(values: np.ndarray) -> int:
+    """The most values in one list of a (count, k) array or an object array of ragged lists."""
+    if values.dtype != object:
+        return values.shape[1]
+    return max((len(v) for v in values), default=0)
 
 
 def _ordered(columns: dict, order: list) -> dict:

@@ -9,6 +9,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .format_info import check_format_info
+
 # Attribute arrays may hold booleans, integers and floats of any width: nothing a file format
 # needs is a string or an object, and refusing those keeps pickles out of the flat-array form.
 _PLAIN_KINDS = "biuf"
@@ -167,6 +169,7 @@ def _from_arrays(cls, arrays: dict, points, normals) -> Scan:
         points = np.full((n, 3), np.nan)
     try:
         info = _refs_to_bytes(info, blobs)
+        check_format_info(info, n)  # anyone may have edited the file: the writers trust these values
         scan = cls(points=points, precision=precision, normals=normals, vertex_attributes=vertex, faces=faces,
                    face_attributes=face, format_info=info)
     except (KeyError, TypeError, RecursionError) as exc:

@@ -4,7 +4,9 @@
       puts there when the scan has attributes; "//X Y Z R G B" from CloudCompare works too)
       names the columns and gives their dtypes; without it (or when the first comment does not
       name every column, starting with x y z), columns 4-6 are normals when every row of them has unit length, and other
-      columns are kept as float64 attributes column_3, column_4, ...
+      columns are kept as float64 attributes column_3, column_4, ... Columns declared as 64-bit
+      integers (id:u8, id:i8) are read and written exactly, not through float64; a header that
+      names a column twice is refused. Only float (or undeclared) nx ny nz are normals.
 .pts  a first line with the point count, then x y z [intensity] [r g b] (Leica/Faro style):
       4 columns are intensity, 6 are colour, 7 are both. A file of several scans, each block
       after its own count line, is read whole with vertex attribute scan_id (uint16), and a scan
@@ -21,7 +23,7 @@ import numpy as np
 
 from .atomic import atomic_write
 from .scan import Scan
-from .text_tables import check_integer_range, numbers, write_rows
+from .text_tables import IntegerOutOfRange, check_integer_range, numbers, write_rows
 
 _HEADER_MARK = "#"
 _PTS_COLUMNS = {3: (), 4: ("intensity",), 6: ("red", "green", "blue"), 7: ("intensity", "red", "green", "blue")}
@@ -35,7 +37,8 @@ def read_xyz(path) -> Scan:
         names, dtypes = _parse_header(header, rows.shape[1], path)
     else:  # no header, or a first comment that does not name the columns
         names, dtypes = _guess_xyz_columns(rows)
-    return _scan(path, rows, names, dtypes, {"format": "xyz", "header": bool(names_given)})
+    exact = _wide_integer_columns(path, names, dtypes) if names_given else {}
+    return _scan(path, rows, names, dtypes, {"format": "xyz", "header": bool(names_given)}, exact)
 
 
 def read_pts(path) -> Scan:
@@ -99,11 +102,14 @@ def write_xyz(path, scan: Scan) -> None:
     if spaced:  # the header is split on whitespace and commas, and ":" starts the dtype
         warnings.warn(f"{path}: column names {spaced} written with '_' for spaces, commas and colons", stacklevel=3)
         names = ["".join("_" if c.isspace() or c in ",:" else c for c in n) or "column" for n in names]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:  # read back, one of the two columns would be lost (an attribute nx beside the normals)
+        raise ValueError(f"column names {twice} would appear twice in the header")
     header = None
     if len(names) > (6 if scan.normals is not None else 3):
         header = " ".join(f"{n}:{c.dtype.str.lstrip('<>=|')}" if i >= 3 else n
                           for i, (n, c) in enumerate(zip(names, columns)))
-    _write(path, np.column_stack(columns) if columns else None, formats, header=header, count=None)
+    _write(path, _rows(columns) if columns else None, formats, header=header, count=None)
 
 
 def write_pts(path, scan: Scan) -> None:
@@ -126,7 +132,7 @@ def write_pts(path, scan: Scan) -> None:
     dropped = [n for n in scan.vertex_attributes if n not in kept] + (["normals"] if scan.normals is not None else [])
     if dropped:
         warnings.warn(f"{path}: .pts has no room for {', '.join(dropped)}; not written", stacklevel=3)
-    _write(path, np.column_stack(columns), formats, header=None, count=counts)
+    _write(path, _rows(columns), formats, header=None, count=counts)
 
 
 # -- helpers ----------------------------------------------------------------------------------
@@ -181,7 +187,41 @@ def _parse_header(header: str, ncols: int, path: str):
             raise ValueError(f"{path}: header column {token!r} has an unknown dtype") from None
     if names[:3] != ["x", "y", "z"]:
         raise ValueError(f"{path}: the header must start with x y z, got {' '.join(tokens[:3])}")
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:  # one name, one attribute: the second column would replace the first
+        raise ValueError(f"{path}: the header names the columns {', '.join(twice)} more than once")
     return names, dtypes
+
+
+def _wide_integer_columns(path: str, names: list, dtypes: list) -> dict:
+    """Column index -> exact values of the columns declared as 64-bit integers (id:u8). The rows
+    are parsed as float64, which holds integers only up to 2**53: 2**60 + 1 would be read as
+    2**60. These columns are read again as text and converted by Python's own integers."""
+    wide = [i for i, d in enumerate(dtypes) if np.dtype(d).kind in "iu" and np.dtype(d).itemsize > 4]
+    if not wide:
+        return {}
+    texts = np.loadtxt(path, dtype=str, comments="#", skiprows=1, usecols=wide, ndmin=2, encoding="utf-8")
+    return {i: _exact_integers(texts[:, j], np.dtype(dtypes[i]), f"column {names[i]}", path)
+            for j, i in enumerate(wide)}
+
+
+def _exact_integers(texts: np.ndarray, dtype: np.dtype, what: str, path: str) -> np.ndarray:
+    """texts as dtype, exactly; a value outside dtype's range or not a whole number is refused."""
+    values = []
+    for text in texts.tolist():
+        try:
+            values.append(int(text))
+        except ValueError:  # 1.0 or 1e3: whole numbers written as floats, exact up to 2**53
+            number = float(text)
+            if not (number.is_integer() and abs(number) <= 2 ** 53):
+                raise ValueError(f"{path}: {what} is declared {dtype} but holds {text}") from None
+            values.append(int(number))
+    info = np.iinfo(dtype)
+    low, high = min(values), max(values)
+    if low < info.min or high > info.max:
+        raise IntegerOutOfRange(f"{path}: {what} is declared {dtype} but holds {low}..{high}, "
+                                f"outside {info.min}..{info.max}")
+    return np.array(values, dtype=dtype)
 
 
 def _guess_xyz_columns(rows: np.ndarray):
@@ -193,14 +233,23 @@ def _guess_xyz_columns(rows: np.ndarray):
     return names, ["f8"] * ncols
 
 
-def _scan(path, rows, names, dtypes, info) -> Scan:
+def _scan(path, rows, names, dtypes, info, exact: dict | None = None) -> Scan:
+    """The Scan of the rows; `exact` gives the values of columns (by index) that float64 rows
+    cannot hold exactly (64-bit integers)."""
     points = rows[:, :3]
     if not np.isfinite(points).all():
         raise ValueError(f"{path}: {int((~np.isfinite(points).all(axis=1)).sum())} points have non-finite coordinates")
-    normals = rows[:, 3:6] if names[3:6] == ["nx", "ny", "nz"] else None
+    # Columns 4-6 are the normals when named nx ny nz and declared float (or not declared);
+    # integer ones (quantised normals) are the user's data, kept as attributes.
+    normals = None
+    if names[3:6] == ["nx", "ny", "nz"] and all(np.dtype(d).kind == "f" for d in dtypes[3:6]):
+        normals = rows[:, 3:6]
     attributes = {}
     for i, (name, dtype) in enumerate(zip(names, dtypes)):
         if name in ("x", "y", "z") or (normals is not None and name in ("nx", "ny", "nz")):
+            continue
+        if exact and i in exact:
+            attributes[name] = exact[i]
             continue
         values = rows[:, i]
         dtype = np.dtype(dtype)
@@ -246,6 +295,18 @@ def _columns(scan: Scan, normals: bool):
             columns.append(values)
             formats.append(_format(values))
     return names, columns, formats
+
+
+def _rows(columns: list) -> np.ndarray:
+    """The columns side by side, as float64, or as Python numbers when a 64-bit integer column
+    holds values float64 would round (above 2**53): %d then writes them exactly."""
+    def rounded(c) -> bool:
+        c = np.asarray(c)
+        return c.dtype.kind in "iu" and c.dtype.itemsize > 4 and c.size > 0 and (
+            int(c.max()) > 2 ** 53 or int(c.min()) < -2 ** 53)
+    if any(rounded(c) for c in columns):
+        return np.column_stack([np.asarray(c).astype(object) for c in columns])
+    return np.column_stack(columns)
 
 
 def _format(values: np.ndarray) -> str:
