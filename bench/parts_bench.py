@@ -2,9 +2,10 @@
 
     python bench/parts_bench.py [--data ../shared/data] [--repeat 3]
 
-Inputs: the dragon scan in file order (151 parts: the body and 150 fragments of at most 78
-points), and a 33k-vertex bumpy UV sphere with 2,000 hair cards of 52 vertices (generator
-order). Times are medians of --repeat runs in this process, levels=4 and the defaults.
+Inputs: the dragon scan in file order (one part: its faces alone give 151 pieces, the body and
+150 fragments of at most 78 points, which share vertex positions with the body), and a 33k-vertex
+bumpy UV sphere with 2,000 hair cards of 52 vertices (generator order). Times are medians of
+--repeat runs in this process, levels=4 and the defaults.
 """
 from __future__ import annotations
 

@@ -235,3 +235,19 @@ def test_the_command_line_mirror_option(half, tmp_path):
                           str(tmp_path / "bad"), "--mirror", "y"], capture_output=True, text=True)
     assert bad.returncode == 2 and "both sides of the y mirror plane" in bad.stderr, bad.stderr
     assert "Traceback" not in bad.stderr
+
+
+def test_a_mirror_plane_far_from_the_half_is_said_so():
+    """A plane 1e6 from a half of size 3 (a wrong origin) made the whole model a line, and the
+    error blamed collinear points; it now names the plane and its distance."""
+    from pointscale import meshes
+    v, _ = meshes.uv_sphere(1.0, 48, 24)
+    half = meshes.bumpy(v, 0.02, 5)
+    half = half[half[:, 0] >= 0]
+    with pytest.raises(ValueError) as refused:
+        ps.decompose(half, 3, mirror=ps.Mirror("x", origin=(-1e6, 0, 0)), threads=1)
+    message = str(refused.value)
+    assert message.startswith("the x mirror plane (x = -1e+06) lies 1e+06 from the half"), message
+    assert "check Mirror's origin" in message
+    with pytest.raises(ValueError, match="^points are collinear"):  # a half that is a line is still said so
+        ps.decompose(np.c_[np.linspace(1, 2, 50), np.zeros(50), np.zeros(50)], 2, mirror="x", threads=1)

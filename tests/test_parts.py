@@ -93,6 +93,9 @@ def test_connected_parts_from_faces_polygons_and_edges():
     (dict(faces=np.array([[0], [1]])), "k >= 2"),
     (dict(edges=np.array([[0, 1, 2]])), r"shape \(m, 2\)"),
     (dict(faces=[[0, 1], [[2, 3]]]), "flat sequence"),
+    # an empty polygon (a PLY may hold one) is named, not blamed on float indices
+    (dict(faces=[[0, 1, 2], [], [3, 4, 5]]), r"1 of the 3 faces is empty .*the first is face 1"),
+    (dict(faces=[[], [3, 4, 5], []]), r"2 of the 3 faces are empty .*the first is face 0"),
 ])
 def test_bad_connectivity_is_refused(kwargs, match):
     points = np.random.default_rng(1).normal(size=(9, 3))
@@ -292,3 +295,131 @@ def test_parts_that_are_all_flat_are_a_clear_error():
     v, f, _ = meshes.joined((a_v, meshes.quads_to_triangles(a_f)), (b_v, meshes.quads_to_triangles(b_f)))
     with pytest.raises(ValueError, match="spans a surface"):
         ps.decompose(v, 3, faces=f)
+
+
+# A stray 5-point triangle fan: far too small for any band.
+FAN = (np.array([[1.5, 0, 0], [1.6, 0.02, 0], [1.6, -0.02, 0], [1.6, 0, 0.02], [1.62, 0, 0]]),
+       np.array([[0, 1, 2], [0, 2, 3], [0, 3, 1], [4, 1, 2]]))
+
+
+def _caught(*args, **kwargs):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        dec = ps.decompose(*args, threads=1, **kwargs)
+    return dec, [str(w.message) for w in caught]
+
+
+@pytest.mark.parametrize("segments, rings", [(40, 20), (48, 24)])
+def test_the_largest_part_decomposes_as_it_would_alone(segments, rings):
+    """The largest part keeps every level and its levels, bands and warnings are those it has
+    alone, whatever small part comes with it. Measured: equal to 4e-16 of the diagonal; before,
+    a 762- or 1106-vertex sphere with a 5-point part at levels=4 was refused."""
+    v, f = meshes.uv_sphere(1.0, segments, rings)
+    v = meshes.bumpy(v, 0.02, 5)
+    points, faces, part = meshes.joined((v, f), FAN)
+    alone, alone_warnings = _caught(v, 4)
+    dec, joined_warnings = _caught(points, 4, faces=faces)
+    assert [p["levels"] for p in dec.parts] == [4, 1]
+    sphere = part == 0
+    d = diagonal(v)
+    for l in range(4):
+        assert np.abs(dec.level(l)[sphere] - alone.level(l)).max() < 1e-13 * d
+    gains = [2.0, 0.5, 1.5]
+    assert np.abs(ps.reconstruct(dec, gains)[sphere] - ps.reconstruct(alone, gains)).max() < 1e-13 * d
+    assert alone_warnings and all(w in joined_warnings for w in alone_warnings)  # the coarse-base warning
+    assert np.abs(dec.level(0)[~sphere] - points[~sphere]).max() == 0.0
+
+
+def test_a_largest_part_too_small_for_the_levels_is_refused_as_alone_and_says_so():
+    """1986 vertices cannot give levels=5 alone (2048 needed); with a 5-point part the sphere
+    kept 2 levels silently, or the message said the largest was too small for levels=2."""
+    v, f = meshes.uv_sphere(1.0, 64, 32)
+    points, faces, _ = meshes.joined((v, f), FAN)
+    with pytest.raises(ValueError, match="at least 2048 points"):
+        ps.decompose(v, 5, threads=1)
+    with pytest.raises(ValueError) as refused:
+        ps.decompose(points, 5, faces=faces, threads=1)
+    message = str(refused.value)
+    assert message.startswith("every connected part is too small")  # the CLI adds --parts none to it
+    assert "1986 points" in message and "levels=5 needs at least 2048" in message
+    assert "levels=2" not in message
+
+
+def test_parts_that_cannot_share_the_largest_parts_coarse_neighbourhoods_keep_no_bands():
+    """levels=4 leave a 1402-vertex sphere 21 clusters at level 0, fewer than neighbors=24: a
+    1302-vertex part (which would keep 2 levels) cannot share that level's neighbourhood width,
+    so it keeps no bands, named, and the largest is still as alone."""
+    v1, f1 = meshes.uv_sphere(1.0, 50, 29)
+    v2, f2 = meshes.uv_sphere(0.5, 50, 27)
+    v2 = meshes.bumpy(v2, 0.02, 5) + [2.0, 0.0, 0.0]
+    points, faces, part = meshes.joined((v1, f1), (v2, f2), (FAN[0] + [0.0, 2.0, 0.0], FAN[1]))
+    dec, caught = _caught(points, 4, faces=faces)
+    assert [p["levels"] for p in dec.parts] == [4, 1, 1]
+    assert "fewer than neighbors=24" in dec.parts[1]["why"]
+    assert any("part 1 (1302 points" in w for w in caught)
+    alone = ps.decompose(v1, 4, threads=1)
+    assert np.abs(dec.level(0)[part == 0] - alone.level(0)).max() < 1e-13 * diagonal(v1)
+    assert np.abs(ps.reconstruct(dec) - points).max() < 1e-12 * diagonal(points)
+
+
+def _split_along_seams(v, f):
+    """The mesh with its vertices duplicated along two seams (z=0 and x=0), as glTF and FBX
+    exports split them along UV seams and hard edges: 4 patches that share no vertex.
+    Returns (vertices, faces, copies, patch), copies listing the indices of each split vertex,
+    patch (n,) each vertex's patch."""
+    centre = v[f].mean(axis=1)
+    group = (centre[:, 2] > 0).astype(int) + 2 * (centre[:, 0] > 0)
+    points, faces, copies, offset = [], np.empty_like(f), {}, 0
+    for g in range(4):
+        used = np.unique(f[group == g])
+        remap = -np.ones(len(v), int)
+        remap[used] = offset + np.arange(len(used))
+        points.append(v[used])
+        faces[group == g] = remap[f[group == g]]
+        for u in used:
+            copies.setdefault(u, []).append(remap[u])
+        offset += len(used)
+    patch = np.repeat(np.arange(4), [len(p) for p in points])
+    return np.concatenate(points), faces, [c for c in copies.values() if len(c) > 1], patch
+
+
+def test_a_mesh_split_along_seams_is_one_part_and_does_not_tear():
+    """Before, the 4 patches were 4 parts: this 48x24 sphere was refused at levels=3 (each patch
+    too small), and the 128x64 one of the QA repro tore 3.2e-2 of its diagonal open at level 0.
+    Now one part: levels equal to those without faces, copies of a vertex 7.5e-5 apart at level 0
+    (measured; the point-based fit, as without faces)."""
+    v, f = meshes.uv_sphere(1.0, 48, 24)
+    v = meshes.bumpy(v, 0.03, 5)
+    points, faces, split, _ = _split_along_seams(v, f)
+    assert len(split) > 50
+    labels, count = connected_parts(points, faces=faces)
+    assert count == 1
+    d = diagonal(points)
+    dec, caught = _caught(points, 3, faces=faces)
+    plain = ps.decompose(points, 3, threads=1)
+    for l in range(3):
+        tear = max(np.linalg.norm(dec.level(l)[c] - dec.level(l)[c[0]], axis=1).max() for c in split) / d
+        assert tear < 1e-4
+        assert np.abs(dec.level(l) - plain.level(l)).max() < 1e-12 * d  # as one surface
+    assert dec.parts is None and not any("part" in w for w in caught)
+
+
+def test_coincident_means_within_a_float32_rounding_not_merely_close():
+    """Copies a float32 rounding apart (1e-8 of the diagonal) are one vertex; two separate
+    patches 1e-5 of the diagonal apart (below any vertex spacing, above any rounding) stay two
+    parts, and so do parts that only lie close (the scenes above)."""
+    v, f = meshes.uv_sphere(1.0, 32, 16)
+    points, faces, split, patch = _split_along_seams(v, f)
+    d = diagonal(points)
+    noisy = points.astype(np.float32).astype(np.float64)
+    rng = np.random.default_rng(3)
+    noisy[np.concatenate(split)] += rng.uniform(-1e-8, 1e-8, (len(np.concatenate(split)), 3)) * d
+    assert connected_parts(noisy, faces=faces)[1] == 1
+    moved = points.copy()
+    moved[patch > 0] += 1e-5 * d  # patches 1..3 off patch 0, still joined to each other
+    labels, count = connected_parts(moved, faces=faces)
+    assert count == 2 and (labels == (patch > 0)).all()
+    for name in SCENES:
+        sv, sf, part = scene(name)
+        labels, count = connected_parts(sv, faces=sf)
+        assert count == 2 and (labels == part).all()

@@ -79,3 +79,29 @@ def test_morph_needs_connectivity_for_both_and_matching_parts():
     sv, sf = meshes.uv_sphere(1.0, 64, 32)
     with pytest.raises(ValueError, match="2 connected parts and B has 1"):
         ps.morph(a, sv, base, faces_a=fa, faces_b=sf)
+
+
+def test_morph_warns_when_paired_parts_differ_in_size():
+    """B lists its eye first: part 0 of A (the head, 0.94 of A's size) is paired with B's eye
+    (0.19 of B's size), ratio 4.9, and morphed into it; that used to be silent. In A's order the
+    pairs' sizes agree within 1.01 and nothing is said."""
+    from pointscale.parts_onto_base import PAIRED_SIZE_RATIO
+    a, fa, part_a = head_and_eye(bump=0.03)
+    hv, hf = meshes.uv_sphere(1.0, 64, 32)
+    ev, ef = meshes.uv_sphere(0.2, 40, 20)
+    ev = ev + np.array([0.55, 0.0, 1.14])
+    base = ps.ellipsoid_base(a, n=6000)
+    for eye_first in (False, True):
+        b, fb, _ = meshes.joined((ev, ef), (hv, hf)) if eye_first else meshes.joined((hv, hf), (ev, ef))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            ps.morph(a, b, base, faces_a=fa, faces_b=fb)
+        said = [str(w.message) for w in caught if "differ in size" in str(w.message)]
+        if not eye_first:
+            assert not said
+            continue
+        assert len(said) == 1 and caught[0].filename == __file__
+        assert f"more than {PAIRED_SIZE_RATIO:g} times" in said[0]
+        assert "A's part 0 (4514 points from vertex 0, 0.94 of A's size) with B's part 0 (762 points" in said[0]
+        assert "0.19 of B's size" in said[0]
+        assert "A's 0 with B's 1, A's 1 with B's 0" in said[0]

@@ -246,8 +246,11 @@ def decompose_mirrored(points, mirror, normals=None, faces=None, edges=None, **o
     pairs = connectivity_pairs(len(p), faces, edges)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        dec = decompose(symmetry.full(half), normals=None if n_arr is None else symmetry.full_vectors(n_arr),
-                        edges=None if pairs is None else symmetry.full_pairs(pairs), **options)
+        try:
+            dec = decompose(symmetry.full(half), normals=None if n_arr is None else symmetry.full_vectors(n_arr),
+                            edges=None if pairs is None else symmetry.full_pairs(pairs), **options)
+        except ValueError as exc:
+            raise _far_plane_error(exc, half, symmetry) from None
     for w in caught:  # the whole model's vertex numbers, said as the half's
         warnings.warn(symmetry.in_half_numbers(str(w.message)), w.category, stacklevel=3)
     for report in dec.settings.get("parts") or ():
@@ -256,6 +259,32 @@ def decompose_mirrored(points, mirror, normals=None, faces=None, edges=None, **o
     dec._mirror_about(symmetry)
     dec.settings["mirror"] = symmetry.settings()
     return dec
+
+
+def _far_plane_error(exc: ValueError, half: np.ndarray, symmetry: Symmetry) -> ValueError:
+    """exc, or what it means when the half spans a surface but the whole model does not: a
+    mirror plane so far from the half that the half and its reflection look like a line."""
+    from ._checks import require_surface
+    try:
+        require_surface(half)
+    except ValueError:
+        return exc
+    try:
+        require_surface(symmetry.full(half))
+    except ValueError:
+        pass  # the half spans a surface and the whole model does not: the plane is too far
+    else:
+        return exc
+    mirror = symmetry.mirror
+    diagonal = float(np.linalg.norm(half.max(axis=0) - half.min(axis=0)))
+    gaps = [float(np.abs(half[:, axis] - mirror.origin[axis]).min()) for axis in mirror.axis_indices]
+    p = int(np.argmax(gaps))
+    axis = mirror.axis_indices[p]
+    return ValueError(f"the {mirror.axes[p]} mirror plane ({mirror.axes[p]} = {mirror.origin[axis]:.6g}) lies "
+                      f"{gaps[p]:.3g} from the half, {gaps[p] / diagonal:.3g} times the half's size ({diagonal:.3g}): "
+                      f"the half and its reflection, that far apart, make a whole model too thin to span a surface "
+                      f"({exc}). A mirror plane usually runs through the half's seam: check Mirror's origin, "
+                      "which is in the points' coordinates")
 
 
 def saved_symmetry(settings: dict, arrays, n_full: int) -> Symmetry | None:

@@ -422,6 +422,8 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
         p = as_points(points)
         labels, count = connected_parts(p, faces, edges, threads=threads)
         if count > 1:
+            if sheets and normals is None:  # the parts' own warnings are not shown: said of the whole
+                _warn_estimated_sides(p, threads)
             options = dict(decimation=decimation, kernel=kernel, neighbors=neighbors, tolerance=tolerance,
                            max_iterations=max_iterations, max_variation=max_variation, smoother=smoother,
                            encoding=encoding, diffusion_iterations=diffusion_iterations, lam=lam, taubin=taubin,
@@ -450,6 +452,8 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     if sheets and n_arr is not None:
         from .sheets import check_sheet_normals
         check_sheet_normals(n_arr)
+    elif sheets:
+        _warn_estimated_sides(p, threads)
     progress = as_callback(progress)
     origin = centre(p)
     settings = dict(_settings_record(options), smoother=smoother, encoding=encoding)
@@ -467,21 +471,22 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     return dec
 
 
+def _warn_estimated_sides(p, threads) -> None:
+    from .sheets import estimated_sides_warning
+    message = estimated_sides_warning(p, threads)
+    if message:
+        warnings.warn(message, stacklevel=3)
+
+
 def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> Decomposition:
     """decompose() of each connected part alone, joined into one Decomposition (pointscale.parts)."""
-    from .parts import decompose_parts, levels_kept, parts_warning
+    from .parts import decompose_parts, parts_warning
     scale_space = _scale_space(levels, options["decimation"], options["kernel"], options["neighbors"],
                                options["tolerance"], options["max_iterations"], options["max_variation"])
     scale_space.validate()  # before the parts' sizes are weighed with them
     levels, decimation, neighbors = scale_space.levels, scale_space.decimation, scale_space.mls.neighbors
-    need = _core.points_needed(scale_space)
     sizes = np.bincount(labels, minlength=count)
-    if levels_kept(sizes, levels, decimation, neighbors, MIN_COARSE_POINTS).max() < 2:
-        need_two = _core.points_needed(_core.DecomposeOptions(levels=2, decimation=decimation))
-        raise ValueError(f"every connected part is too small to decompose: the largest has {sizes.max()} points, and "
-                         f"levels=2 needs at least {need_two} "
-                         f"(levels={levels} needs {need}). Decompose without faces and edges to treat the parts "
-                         "as one surface")
+    # decompose_parts refuses a largest part too small for the levels, as decompose refuses it alone
     require_extent(p)
     n_arr = as_normals_of(normals, p)
     origin = centre(p)

@@ -53,6 +53,9 @@ def connectivity_pairs(n: int, faces=None, edges=None) -> np.ndarray | None:
 def connected_parts(points, faces=None, edges=None, *, threads: int = 0) -> tuple[np.ndarray, int]:
     """The parts that faces or edges connect: (labels (n,) int32, count).
 
+    Vertices at one position are one vertex here: a mesh split along its UV seams or hard edges
+    (as glTF, FBX and game assets are), whose copies of a vertex lie in different faces, is one
+    part (see COINCIDENT for how close counts as one position).
     Parts are numbered in the order of their lowest vertex in a face or edge. A vertex in no
     face or edge (a scan's untriangulated point) joins the part of its nearest vertex that is
     in one; with no faces and no edges everything is one part. threads: as decompose's.
@@ -62,8 +65,55 @@ def connected_parts(points, faces=None, edges=None, *, threads: int = 0) -> tupl
     pairs = connectivity_pairs(len(p), faces, edges)
     if pairs is None:
         return np.zeros(len(p), dtype=np.int32), 1
-    labels, count = _core.connected_parts(p, pairs, threads=thread_option(threads))
+    if len(pairs):
+        pairs = np.concatenate([pairs, coincident_pairs(p, np.unique(pairs))]).astype(np.int32, copy=False)
+    labels, count = _core.connected_parts(p, np.ascontiguousarray(pairs), threads=thread_option(threads))
     return labels, int(count)
+
+
+#: Vertices this close, as a fraction of the bounding-box diagonal of the vertices in faces and
+#: edges, are at one position for connected_parts. The copies of a split vertex are written from
+#: one value, so they are usually exactly equal; after single-precision storage and arithmetic
+#: they may differ by a unit or two in the last place of a float32 coordinate, which is at most
+#: 2**-23 of a coordinate of the diagonal's size. 2**-22 covers that and stays far below any
+#: mesh's vertex spacing (a million-vertex surface has a spacing near 1e-3 of its diagonal).
+#: Vertices up to 2 * sqrt(3) times this apart may be joined (coincident_pairs), still below the
+#: mirror's default seam: a point off a mirror plane and its reflection are at least 2.02e-6 of
+#: the half's diagonal apart (pointscale.mirror), so they are not joined unless the whole model
+#: is over 4 times the half's size or the seam was set smaller; joined, they would only be one
+#: part, as a part that crosses the plane is.
+COINCIDENT = 2.0 ** -22
+
+
+def coincident_pairs(p: np.ndarray, among: np.ndarray) -> np.ndarray:
+    """(m, 2) pairs of the vertices `among` (indices into p) that are at one position: every two
+    within COINCIDENT * diagonal of each other along each axis are joined (through others of
+    their group), and none farther apart than 2 * sqrt(3) of that."""
+    q = p[among]
+    if len(q) < 2:
+        return np.zeros((0, 2), dtype=np.int64)
+    lo = q.min(axis=0)
+    diagonal = float(np.linalg.norm(q.max(axis=0) - lo))
+    if not diagonal > 0.0:  # all at one position
+        return np.stack([np.full(len(among) - 1, among[0]), among[1:]], axis=1).astype(np.int64)
+    cell = 2.0 * COINCIDENT * diagonal
+    scaled = (q - lo) / cell  # at most 2**21 cells along an axis
+    # One int64 key per cell: the cell counts' product is below 2**61, since the extents'
+    # product is at most (diagonal / sqrt(3))**3.
+    counts = np.floor(scaled.max(axis=0)).astype(np.int64) + 2
+    found = []
+    # Two grids along each axis, the second shifted by half a cell: two vertices closer than half
+    # a cell along an axis share a cell of one of them, so of one of the 8 combinations.
+    for shift in range(8):
+        cells = np.floor(scaled + [0.5 * ((shift >> a) & 1) for a in range(3)]).astype(np.int64)
+        key = (cells[:, 0] * counts[1] + cells[:, 1]) * counts[2] + cells[:, 2]
+        order = np.argsort(key)  # any order of equal keys joins the same vertices
+        same = np.flatnonzero(key[order[1:]] == key[order[:-1]])
+        if same.size:
+            found.append(np.stack([order[same], order[same + 1]], axis=1))
+    if not found:
+        return np.zeros((0, 2), dtype=np.int64)
+    return among[np.concatenate(found)].astype(np.int64)
 
 
 def _integers(a, what: str) -> np.ndarray:
@@ -97,6 +147,10 @@ def _face_pairs(faces) -> np.ndarray:
         return np.zeros((0, 2), dtype=np.int64)
     if any(poly.ndim != 1 for poly in polygons):
         raise ValueError("each face must be a flat sequence of vertex indices")
+    empty = [i for i, poly in enumerate(polygons) if poly.size == 0]
+    if empty:
+        raise ValueError(f"{len(empty)} of the {len(polygons)} faces {'is' if len(empty) == 1 else 'are'} empty "
+                         f"(no vertex indices; the first is face {empty[0]}): a face joins at least one vertex")
     flat = _integers(np.concatenate(polygons), "faces")
     lengths = np.array([len(poly) for poly in polygons])
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
@@ -106,15 +160,16 @@ def _face_pairs(faces) -> np.ndarray:
 
 def levels_kept(sizes: np.ndarray, levels: int, decimation: float, neighbors: int, minimum: int) -> np.ndarray:
     """Per part, how many of the levels asked its own resolution supports (1: the part itself
-    only, with no bands). The largest part (and any as large) keeps them all, as a single
-    surface would; any other needs PART_COARSE_POINTS support points at its coarsest level."""
+    only, with no bands). The largest part (and any as large) keeps them all: it is decomposed
+    exactly as it would be alone, whatever smaller parts come with it (decompose_parts refuses
+    the call, as decompose refuses that part alone, when it is too small for them). Any other
+    part needs PART_COARSE_POINTS support points at its coarsest level."""
     kept = np.ones(len(sizes), dtype=np.int64)
     for count in range(2, levels + 1):
         coarse = np.floor(decimation ** (count - 1) * sizes.astype(np.float64))
         kept[coarse >= max(minimum, neighbors, PART_COARSE_POINTS)] = count
-    largest = sizes == sizes.max()
-    if np.floor(decimation ** (levels - 1) * float(sizes.max())) >= max(minimum, neighbors):
-        kept[largest] = levels
+    if len(sizes):
+        kept[sizes == sizes.max()] = max(levels, 1)
     return kept
 
 
@@ -124,21 +179,37 @@ def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, leve
     threads: for the parts too small to decompose, which are joined here.
 
     decompose_one(points, normals, levels, progress) -> Decomposition decomposes one part.
+    The largest part is decomposed first and exactly as it would be alone: with every level
+    asked, or not at all (ValueError) when it is too small for them.
     """
     order = np.argsort(labels, kind="stable")
     sizes = np.bincount(labels, minlength=count)
     bounds = np.concatenate([[0], np.cumsum(sizes)])
+    need = _core.points_needed(_core.DecomposeOptions(levels=levels, decimation=decimation))
+    if sizes.max() < need:
+        raise ValueError(f"every connected part is too small to decompose with levels={levels}: the largest has "
+                         f"{sizes.max()} points, and levels={levels} needs at least {need} (as it would alone). "
+                         "Use fewer levels, or decompose without faces and edges to treat the parts as one surface")
     kept = levels_kept(sizes, levels, decimation, neighbors, minimum)
     n, k = len(p), levels - 1
     total = float(n)
     done = 0
-    parts = []
-    for part in range(count):
+    parts = [None] * count
+    # Each joined level holds one neighbourhood width: the first decomposed part's (the
+    # largest's, as it has them alone). A coarse level of it with fewer clusters than
+    # `neighbors` has narrower neighbourhoods, which a smaller part's levels cannot share.
+    widths = None
+    for part in sorted(range(count), key=lambda q: (-sizes[q], q)):  # the largest first
         idx = order[bounds[part]:bounds[part + 1]]  # ascending: argsort is stable
         points = p[idx]
         reason = None
         if kept[part] >= 2 and not _spans_surface(points):
             reason = "it spans no surface (its points are on a line or a plane)"
+            kept[part] = 1
+        if kept[part] >= 2 and widths is not None and kept[part] < levels and min(widths) < neighbors:
+            reason = (f"levels={levels} leave the largest part only {min(widths)} support points at its coarsest "
+                      f"level, fewer than neighbors={neighbors}, which the other parts' levels would need; "
+                      "use fewer levels")
             kept[part] = 1
         dec = None
         if kept[part] >= 2:
@@ -150,14 +221,17 @@ def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, leve
                 dec = decompose_one(points, None if normals is None else normals[idx], int(kept[part]), sub)
             except ValueError as exc:
                 raise ValueError(f"part {part} ({len(idx)} points, first vertex {idx[0]}): {exc}") from None
-        parts.append((idx, dec, reason))
+            if widths is None:
+                a = dec._model.to_arrays()
+                widths = [int(a[f"neighborhoods_{max(l - (k - dec.n_bands), 0)}"].shape[1]) for l in range(k)]
+        parts[part] = (idx, dec, reason)
         done += len(idx)
         if progress is not None and progress(done / total) is False:
             raise _core.Cancelled("cancelled")
     if all(dec is None for _, dec, _ in parts):
         raise ValueError("no connected part large enough to decompose spans a surface (each is flat or on a line): "
                          "there is no detail to separate from a base")
-    arrays = _joined(p, normals, parts, k, neighbors, origin, threads)
+    arrays = _joined(p, normals, parts, k, widths, origin, threads)
     arrays["parts"] = np.ascontiguousarray(labels, dtype=np.int32)
     reports = [_part_report(part, idx, dec, reason, levels, p) for part, (idx, dec, reason) in enumerate(parts)]
     stats = _joined_stats(parts, k, sizes)
@@ -173,10 +247,10 @@ def _spans_surface(points: np.ndarray) -> bool:
     return True
 
 
-def _joined(p, normals, parts, k, neighbors, origin, threads) -> dict:
+def _joined(p, normals, parts, k, widths, origin, threads) -> dict:
     """One model's arrays from the parts' (see to_dict): each part's clusters follow the
     previous part's, and a part with fewer bands takes its smoothest level's support for the
-    coarser levels, where its bands are zero."""
+    coarser levels, where its bands are zero. widths: each level's neighbourhood width."""
     n = len(p)
     base = np.empty((n, 3))
     details = np.zeros((k, n))
@@ -201,9 +275,9 @@ def _joined(p, normals, parts, k, neighbors, origin, threads) -> dict:
         for l in range(k):
             own = max(l - shift, 0)
             c = len(a[f"kernel_{own}"])
-            if a[f"neighborhoods_{own}"].shape[1] != neighbors:
-                raise ValueError(f"a part has {a[f'neighborhoods_{own}'].shape[1]} neighbours per cluster, "
-                                 f"not {neighbors}")  # levels_kept should never allow it
+            if a[f"neighborhoods_{own}"].shape[1] != widths[l]:
+                raise ValueError(f"a part has {a[f'neighborhoods_{own}'].shape[1]} neighbours per cluster at level "
+                                 f"{l}, not {widths[l]}")  # decompose_parts should never allow it
             labels[l, idx] = a["labels"][own] + offsets[l]
             local[l][idx] = a[f"local_{own}"]
             per_level[l]["neighborhoods"].append(a[f"neighborhoods_{own}"] + offsets[l])
@@ -213,7 +287,7 @@ def _joined(p, normals, parts, k, neighbors, origin, threads) -> dict:
             offsets[l] += c
     frozen = [idx for idx, dec, _ in parts if dec is None]
     if frozen:
-        _frozen_parts(p, normals, frozen, k, neighbors, kernel_scale, origin, base, base_normals, labels, per_level,
+        _frozen_parts(p, normals, frozen, k, widths, kernel_scale, origin, base, base_normals, labels, per_level,
                       offsets, threads)
     out = dict(base=base, details=details, base_normals=base_normals, labels=labels)
     for l in range(k):
@@ -225,23 +299,24 @@ def _joined(p, normals, parts, k, neighbors, origin, threads) -> dict:
     return out
 
 
-def _frozen_parts(p, normals, frozen, k, neighbors, kernel_scale, origin, base, base_normals, labels, per_level,
+def _frozen_parts(p, normals, frozen, k, widths, kernel_scale, origin, base, base_normals, labels, per_level,
                   offsets, threads) -> None:
     """The parts with no bands, all at once: every level is the part itself. Each point is its
     own cluster, with its nearest points of its part as neighbours, so that its normals are
     fitted on the part alone; they only orient it, since nothing is displaced along them.
-    frozen: each such part's point indices. Their clusters follow all the others'."""
+    frozen: each such part's point indices. Their clusters follow all the others'; their
+    neighbourhoods take each level's width (the nearest first, so a narrower one is a prefix)."""
     idx = np.concatenate(frozen)
     part = np.repeat(np.arange(len(frozen)), [len(f) for f in frozen]).astype(np.int32)
     points = np.ascontiguousarray(p[idx])
     m = len(idx)
     base[idx] = points - origin
     base_normals[idx] = _part_normals(points, part, len(frozen), None if normals is None else normals[idx])
-    rows = _core.knn_within_parts(points, part, k=neighbors, threads=threads).astype(np.int64)
+    rows = _core.knn_within_parts(points, part, k=max(widths), threads=threads).astype(np.int64)
     own = np.arange(m)
     for l in range(k):
         labels[l, idx] = offsets[l] + own
-        per_level[l]["neighborhoods"].append(rows + offsets[l])
+        per_level[l]["neighborhoods"].append(rows[:, :widths[l]] + offsets[l])
         per_level[l]["kernel"].append(np.full(m, kernel_scale[l]))
         per_level[l]["anchors"].append(idx)
         per_level[l]["frames"].append(np.repeat((offsets[l] + own)[:, None], 2, axis=1))

@@ -9,12 +9,18 @@ B's offsets are never carried from one part onto another.
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .parts import connected_parts, decompose_parts, parts_warning
 
 #: encode keeps no decimation of the model: a part needs its own support points at full size.
 _NO_DECIMATION = 1.0
+#: morph warns when two paired parts' sizes (bounding-box diagonals, each as a share of its
+#: model's) differ by more than this factor: a morph may grow a part, but not by this much
+#: without a reason to check, and a head paired with an eye differs by 5.
+PAIRED_SIZE_RATIO = 2.0
 
 
 def encode_by_part(p: np.ndarray, labels: np.ndarray, count: int, encode_one, neighbors: int, minimum: int,
@@ -41,7 +47,49 @@ def matched_parts(a: np.ndarray, b: np.ndarray, faces_a, edges_a, faces_b, edges
     if count_a != count_b:
         raise ValueError(f"A has {count_a} connected parts and B has {count_b}: morph matches part i of A with part "
                          "i of B, so both need the same parts (or morph them without faces and edges)")
+    if count_a > 1:
+        message = pairing_warning(a, labels_a, b, labels_b, count_a)
+        if message:
+            warnings.warn(message, stacklevel=3)
     return labels_a, labels_b, count_a
+
+
+def _part_sizes(p: np.ndarray, labels: np.ndarray, count: int):
+    """Each part's (points, first vertex, bounding-box diagonal as a share of the model's)."""
+    whole = max(float(np.linalg.norm(p.max(axis=0) - p.min(axis=0))), np.finfo(float).tiny)
+    out = []
+    for part in range(count):
+        idx = np.flatnonzero(labels == part)
+        q = p[idx]
+        out.append((len(idx), int(idx[0]), float(np.linalg.norm(q.max(axis=0) - q.min(axis=0))) / whole))
+    return out
+
+
+def pairing_warning(a, labels_a, b, labels_b, count: int) -> str | None:
+    """The warning for parts that morph pairs by number (by lowest vertex) although their sizes
+    differ by more than PAIRED_SIZE_RATIO, as when B lists its parts in another order; or None.
+    It names the pairs and the pairing by size where that differs."""
+    sa, sb = _part_sizes(a, labels_a, count), _part_sizes(b, labels_b, count)
+    tiny = 1e-12  # a part of one point has no size
+    ratio = [max(x[2], tiny) / max(y[2], tiny) for x, y in zip(sa, sb)]
+    bad = [i for i, r in enumerate(ratio) if max(r, 1.0 / r) > PAIRED_SIZE_RATIO]
+    if not bad:
+        return None
+
+    def said(model, part, size):
+        return f"{model}'s part {part} ({size[0]} points from vertex {size[1]}, {size[2]:.2g} of {model}'s size)"
+
+    named = "; ".join(f"{said('A', i, sa[i])} with {said('B', i, sb[i])}" for i in bad[:5])
+    more = f"; and {len(bad) - 5} more" if len(bad) > 5 else ""
+    by_size = [int(np.argmin([abs(np.log(max(x[2], tiny) / max(y[2], tiny))) for y in sb])) for x in sa]
+    hint = ""
+    if len(set(by_size)) == count and by_size != list(range(count)):
+        pairs = ", ".join(f"A's {i} with B's {j}" for i, j in enumerate(by_size) if i != j)
+        hint = f" By size, the pairs would be {pairs}."
+    return (f"morph pairs part i of A with part i of B (parts numbered by their lowest vertex), and {len(bad)} "
+            f"pair{'s differ' if len(bad) > 1 else ' differs'} in size by more than {PAIRED_SIZE_RATIO:g} times: "
+            f"{named}{more}.{hint} If B lists its parts in another order than A, each is morphed into the wrong "
+            "one: give B's vertices with its parts in A's order (or morph without faces and edges)")
 
 
 def morph_by_part(labels_a: np.ndarray, labels_b: np.ndarray, count: int, morph_one, progress):
