@@ -17,7 +17,9 @@ MASK = "Band {} mask"
 EDIT = "Multiscale Edit"
 FILTER = "Multiscale Filter"
 PREVIOUS = " (previous)"  # a re-decompose keeps the last results under this suffix
+RESULTS = (EDIT, FILTER, EDIT + PREVIOUS, FILTER + PREVIOUS)  # the result keys' names
 OWNED = "pointscale_keys"  # mesh ID property: the key names this add-on created
+GROUPS = "pointscale_groups"  # mesh ID property: the vertex groups this add-on created
 BAND_MIN = -1.0  # gain 0
 BAND_MAX = 4.0  # gain 5
 
@@ -82,16 +84,52 @@ def owned(mesh, old_k: int) -> set:
 
 def layout_problem(mesh, k: int, old_k: int) -> str | None:
     """Why a decompose into k bands cannot write its keys: absolute keys, or a key of the
-    artist's with one of the layout's names (which would be overwritten)."""
+    artist's with one of the layout's or the results' names (which would be overwritten)."""
     kbs = key_blocks(mesh)
     if kbs is None:
         return None
     if not mesh.shape_keys.use_relative:
         return "its shape keys are absolute (Relative is off): turn Relative on, or remove the keys, first"
     mine = owned(mesh, old_k)
-    for name in [level_name(l) for l in range(k)] + [band_name(l) for l in range(k)]:
+    for name in [level_name(l) for l in range(k)] + [band_name(l) for l in range(k)] + list(RESULTS):
         if name in kbs and name not in mine:
             return f"it has a shape key '{name}' of its own: rename it first, the decomposition writes that name"
+    return None
+
+
+def result_problem(mesh, name: str, old_k: int) -> str | None:
+    """Why Rebuild Detail / Bake Filter cannot write the result key ``name``: a key of the
+    artist's has that name (made after the Decompose, which refuses one made before)."""
+    if get(mesh, name) is not None and name not in owned(mesh, old_k):
+        return (f"it has a shape key '{name}' of its own, and the result is written under that name: "
+                "rename that key first; nothing was modified")
+    return None
+
+
+def owned_groups(mesh, old_k: int) -> set:
+    """Vertex-group names this add-on created on ``mesh`` (band masks, Folds). Decompositions made
+    before the list was kept own the masks of their ``old_k`` bands, and a Folds group they marked."""
+    if GROUPS in mesh.keys():
+        return set(mesh[GROUPS])
+    mine = {mask_name(l) for l in range(old_k)} if old_k > 0 else set()
+    if FOLDS_MARKED in mesh.keys():
+        mine.add(FOLDS)
+    return mine
+
+
+def set_owned_groups(mesh, names) -> None:
+    mesh[GROUPS] = sorted(set(names))
+
+
+def groups_problem(obj, k: int, old_k: int) -> str | None:
+    """Why a decompose into k bands cannot use its mask names: a vertex group of the artist's
+    named ``Band l mask`` (the add-on would take it as the band's mask, and Clear remove it)."""
+    mine = owned_groups(obj.data, old_k)
+    for name in [mask_name(l) for l in range(k)]:
+        if obj.vertex_groups.get(name) is not None and name not in mine:
+            return (f"it has a vertex group '{name}' of its own: rename it first, the add-on makes that group "
+                    "as the band's mask (to use your group as a mask, pick it as the band key's Vertex Group "
+                    "after the Decompose)")
     return None
 
 
@@ -116,12 +154,19 @@ def remove_key(obj, name: str) -> None:
 def ensure_mask(obj, l: int):
     """The vertex group ``Band l mask``; a new one starts at weight 1 everywhere (full band).
     Made when the artist first paints the band (0.5 s at 1M vertices), not by Decompose: a band
-    key without a vertex group applies fully, as a full mask does."""
+    key without a vertex group applies fully, as a full mask does. ValueError when a group of
+    that name is the artist's own (one this add-on did not make)."""
     name = mask_name(l)
+    mesh = obj.data
+    mine = owned_groups(mesh, mesh.multiscale.n_bands)
     vg = obj.vertex_groups.get(name)
+    if vg is not None and name not in mine:
+        raise ValueError(f"'{obj.name}' has a vertex group '{name}' of its own: rename it first, the add-on "
+                         "makes that group as the band's mask (or pick your group as the band key's Vertex Group)")
     if vg is None:
         vg = obj.vertex_groups.new(name=name)
-        vg.add(range(len(obj.data.vertices)), 1.0, "REPLACE")
+        vg.add(range(len(mesh.vertices)), 1.0, "REPLACE")
+    set_owned_groups(mesh, mine | {name})
     return vg
 
 
@@ -129,21 +174,32 @@ FOLDS = "Folds"
 FOLDS_MARKED = "pointscale_folds_marked"  # mesh ID property: how many points show_folds last marked
 
 
-def show_folds(obj, mask: np.ndarray) -> None:
-    """The vertex group ``Folds``: weight 1 on the points that fold, none elsewhere."""
+def show_folds(obj, mask: np.ndarray) -> bool:
+    """The vertex group ``Folds``: weight 1 on the points that fold, none elsewhere. False (and
+    nothing changed) when a ``Folds`` group is the artist's own, which is never written. The
+    active vertex group stays the one the artist had."""
+    mesh = obj.data
+    mine = owned_groups(mesh, mesh.multiscale.n_bands)
     folded = np.flatnonzero(mask).tolist()
     old = obj.vertex_groups.get(FOLDS)
+    if old is not None and FOLDS not in mine:
+        return False
     # Nothing folds and the group this add-on left holds nothing: keep it. Removing a group
     # walks every vertex's weights (0.1 s at a million vertices), for no change.
-    if not folded and old is not None and obj.data.get(FOLDS_MARKED) == 0:
-        return
+    if not folded and old is not None and mesh.get(FOLDS_MARKED) == 0:
+        return True
+    active = obj.vertex_groups.active.name if obj.vertex_groups.active is not None else None
     # A new group each time: emptying the old one vertex by vertex took 30 ms at 100k.
     if old is not None:
         obj.vertex_groups.remove(old)
-    vg = obj.vertex_groups.new(name=FOLDS)
+    vg = obj.vertex_groups.new(name=FOLDS)  # becomes the active group
     if folded:
         vg.add(folded, 1.0, "REPLACE")
-    obj.data[FOLDS_MARKED] = len(folded)
+    mesh[FOLDS_MARKED] = len(folded)
+    set_owned_groups(mesh, mine | {FOLDS})
+    if active is not None and active != FOLDS:
+        obj.vertex_groups.active_index = obj.vertex_groups[active].index
+    return True
 
 
 def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int) -> list:
@@ -152,6 +208,7 @@ def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int) -> list
     and keeps the active key. Returns the names of the keys it kept that way."""
     mesh = obj.data
     mine = owned(mesh, old_k)
+    groups = owned_groups(mesh, old_k)  # recorded from now on, also when the list was not kept yet
     active = obj.active_shape_key.name if obj.active_shape_key is not None else None
     k = levels.shape[0]
     layout = [level_name(l) for l in range(k)] + [band_name(l) for l in range(k)]
@@ -162,34 +219,44 @@ def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int) -> list
         kb.value = 0.0
         # A mask painted for an earlier decompose stays in use; a new band has none (see ensure_mask).
         mask = obj.vertex_groups.get(mask_name(l))
-        kb.vertex_group = mask.name if mask is not None else ""
-    for name in sorted(mine - set(layout) - {EDIT, FILTER}):
+        kb.vertex_group = mask.name if mask is not None and mask.name in groups else ""
+    for name in sorted(mine - set(layout) - set(RESULTS)):
         remove_key(obj, name)
     kept = []
     for name in (EDIT, FILTER):
         kb = get(mesh, name)
         if kb is not None and name in mine:
-            remove_key(obj, name + PREVIOUS)
+            if name + PREVIOUS in mine:  # an artist's key of that name is refused before (layout_problem)
+                remove_key(obj, name + PREVIOUS)
             kb.name = name + PREVIOUS
             kept.append(kb.name)
-    mesh[OWNED] = layout
+    # The "(previous)" keys stay the add-on's: the next Decompose replaces them, Clear keeps them.
+    mesh[OWNED] = layout + [name + PREVIOUS for name in (EDIT, FILTER) if get(mesh, name + PREVIOUS) is not None
+                            and (name + PREVIOUS in mine or name + PREVIOUS in kept)]
+    set_owned_groups(mesh, groups)
     _restore_active(obj, active)
     return kept
 
 
 def remove_layout(obj, k: int) -> None:
+    """Removes the keys this add-on made, but for the kept "(previous)" results, which stay
+    recorded as the add-on's (a later Decompose replaces them)."""
     mesh = obj.data
     active = obj.active_shape_key.name if obj.active_shape_key is not None else None
-    for name in sorted(owned(mesh, k)):
+    mine = owned(mesh, k)
+    kept = [name for name in (EDIT + PREVIOUS, FILTER + PREVIOUS) if name in mine and get(mesh, name) is not None]
+    for name in sorted(mine - set(kept)):
         remove_key(obj, name)
-    if OWNED in mesh.keys():
+    if kept:
+        mesh[OWNED] = kept
+    elif OWNED in mesh.keys():
         del mesh[OWNED]
     _restore_active(obj, active)
 
 
 def add_owned(mesh, name: str) -> None:
     """Records a key made after the decompose (Multiscale Edit / Filter) as the add-on's."""
-    names = list(mesh[OWNED]) if OWNED in mesh.keys() else []
+    names = list(mesh[OWNED]) if OWNED in mesh.keys() else sorted(owned(mesh, mesh.multiscale.n_bands))
     if name not in names:
         mesh[OWNED] = names + [name]
 

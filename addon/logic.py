@@ -13,6 +13,8 @@ Conventions (n points, k bands, levels P^0..P^k, P^k = the input):
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 __all__ = [
@@ -25,8 +27,10 @@ __all__ = [
     "join_float64",
     "pack_decomposition",
     "unpack_decomposition",
+    "column_names",
     "check_points",
     "levels_that_fit",
+    "parts_message",
 ]
 
 
@@ -218,6 +222,22 @@ def unpack_decomposition(columns_get, extras: dict, meta: dict, n: int) -> dict:
     return out
 
 
+def column_names(meta: dict) -> list:
+    """The attribute-name suffixes that :func:`pack_decomposition` wrote for ``meta``: exactly
+    its columns, so that removing them touches no other attribute."""
+    names = []
+    for key, info in meta.items():
+        if info["where"] != "attr":
+            continue
+        shape = tuple(int(s) for s in info["shape"])
+        stored = (shape[1], shape[0]) if info.get("transpose", False) else shape
+        m = int(np.prod(stored[1:])) if len(stored) > 1 else 1
+        for j in range(m):
+            base = f"{key}.{j}"
+            names += [base + ".hi", base + ".lo"] if np.dtype(info["dtype"]) == np.float64 else [base]
+    return names
+
+
 # ---------------------------------------------------------------- input
 
 def check_points(points: np.ndarray, minimum: int = 4) -> str | None:
@@ -257,3 +277,18 @@ def levels_that_fit(n: int, levels: int, decimation: float, min_coarse: int) -> 
     return fitting, (f"the mesh has {n} vertices, and {levels} levels at Decimation {decimation:g} need {need}: "
                      f"decomposed with {fitting} levels. For {levels}, subdivide the mesh (a Subdivision Surface "
                      f"modifier, applied) or {hint}")
+
+
+def parts_message(message: str, neighbors: int, levels: int) -> str:
+    """The engine's refusal of a mesh whose connected parts are all too small, in the add-on's
+    terms (the Neighbours and Levels settings, the Keep Parts Apart option) rather than the
+    engine's (faces and edges, levels=N); any other message as it is. Each part is decomposed
+    alone, so its levels need Neighbours support points of that part, and the engine's counts
+    alone can read as a contradiction (a largest part of 441 points refused where 32 are needed)."""
+    if not message.startswith("every connected part is too small"):
+        return message
+    found = re.search(r"the largest has (\d+) points", message)
+    largest = f" (the largest has {found.group(1)} vertices)" if found else ""
+    return (f"every connected part of the mesh is too small to decompose alone{largest} with Levels {levels} "
+            f"and Neighbours {neighbors}: Keep Parts Apart decomposes each part by itself. Lower Neighbours "
+            "or Levels, or turn off Keep Parts Apart to decompose the parts as one surface")

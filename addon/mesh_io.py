@@ -114,8 +114,3 @@ def read_attribute(mesh, name: str, kind: str) -> np.ndarray:
     buf = np.empty(n * width, dtype=np.int32 if kind == "INT" else np.float32)
     attr.data.foreach_get(prop, buf)
     return buf if width == 1 else buf.reshape(n, width)
-
-
-def remove_attributes(mesh, prefix: str) -> None:
-    for name in [a.name for a in mesh.attributes if a.name.startswith(prefix)]:
-        mesh.attributes.remove(mesh.attributes[name])

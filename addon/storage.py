@@ -42,26 +42,66 @@ def store(mesh, dec, details=None, normals=None, recipe=None, sheet_normals=None
     With a ``recipe`` only the recipe is kept (format 2), else the whole model (format 1)."""
     n = dec.n_points
     clear(mesh)
-    if recipe is None:
-        _store_model(mesh, dec, n)
-    elif recipe.get("normals"):
-        mesh_io.write_attribute(mesh, SHEET_NORMALS, "FLOAT_VECTOR", sheet_normals)
-    # Vertex indices as data: Blender reorders attributes with the vertices, so a sort shows here.
-    mesh_io.write_attribute(mesh, ORDER, "INT", np.arange(n, dtype=np.int32))
-    k = dec.n_bands
-    details = dec.details if details is None else details
-    for l in range(k):
-        mesh_io.write_attribute(mesh, f"{DETAIL}{l}", "FLOAT", details[l])
-        if normals is not None:
-            mesh_io.write_attribute(mesh, f"{NORMAL}{l}", "FLOAT_VECTOR", normals[l])
-    if recipe is not None:
-        mesh[PROP] = {"format": FORMAT, "n": n, "k": k, "recipe": recipes.dumps(recipe)}
+    written = []  # removed again if a write fails: never leave half-written data
+
+    def write(name, kind, values):
+        written.append(name)
+        mesh_io.write_attribute(mesh, name, kind, values)
+
+    try:
+        if recipe is None:
+            _store_model(mesh, dec, n, write)
+        elif recipe.get("normals"):
+            write(SHEET_NORMALS, "FLOAT_VECTOR", sheet_normals)
+        # Vertex indices as data: Blender reorders attributes with the vertices, so a sort shows here.
+        write(ORDER, "INT", np.arange(n, dtype=np.int32))
+        k = dec.n_bands
+        details = dec.details if details is None else details
+        for l in range(k):
+            write(f"{DETAIL}{l}", "FLOAT", details[l])
+            if normals is not None:
+                write(f"{NORMAL}{l}", "FLOAT_VECTOR", normals[l])
+        if recipe is not None:
+            mesh[PROP] = {"format": FORMAT, "n": n, "k": k, "recipe": recipes.dumps(recipe)}
+    except Exception:
+        _remove(mesh, written)
+        raise
 
 
-def _store_model(mesh, dec, n: int) -> None:
+def attribute_names(mesh) -> list:
+    """The attributes the stored decomposition consists of (all of them the add-on's own)."""
+    if not has_data(mesh):
+        return []
+    info = mesh[PROP]
+    k = int(info.get("k", 0))
+    names = [ORDER, SHEET_NORMALS] + [f"{DETAIL}{l}" for l in range(k)] + [f"{NORMAL}{l}" for l in range(k)]
+    if "meta" in info:  # format 1: the model's columns
+        names += [HIDDEN + name for name in logic.column_names(json.loads(info["meta"]))]
+    return names
+
+
+def attributes_problem(mesh, k: int, normals: bool) -> str | None:
+    """Why a decompose into k bands cannot write its attributes: an attribute of the artist's
+    with one of their names (``ms_detail_<l>``, with normals ``ms_normal_<l>``)."""
+    mine = set(attribute_names(mesh))
+    wanted = [f"{DETAIL}{l}" for l in range(k)] + ([f"{NORMAL}{l}" for l in range(k)] if normals else [])
+    for name in wanted:
+        if mesh.attributes.get(name) is not None and name not in mine:
+            return f"it has an attribute '{name}' of its own: rename it first, the decomposition writes that name"
+    return None
+
+
+def _remove(mesh, names) -> None:
+    for name in names:
+        attr = mesh.attributes.get(name)
+        if attr is not None:
+            mesh.attributes.remove(attr)
+
+
+def _store_model(mesh, dec, n: int, write) -> None:
     columns, extras, meta = logic.pack_decomposition(dec.to_dict(), n)
     for name, (kind, values) in columns.items():
-        mesh_io.write_attribute(mesh, HIDDEN + name, kind, values)
+        write(HIDDEN + name, kind, values)
     mesh[PROP] = {
         "format": 1,
         "n": n,
@@ -120,16 +160,31 @@ def read_details(mesh, band: int) -> np.ndarray:
 
 
 def clear(mesh) -> None:
-    mesh_io.remove_attributes(mesh, HIDDEN)  # the order column and sheet normals too
-    mesh_io.remove_attributes(mesh, DETAIL)
-    mesh_io.remove_attributes(mesh, NORMAL)
+    """Removes the stored decomposition: its own attributes by their exact names (an artist's
+    ``ms_detail_sculpt`` is not the add-on's), and the ID property."""
+    _remove(mesh, attribute_names(mesh))
     if PROP in mesh.keys():
         del mesh[PROP]
 
 
+AGAIN = "Decompose again to start from the mesh as it is now"
+
+
+def basis_problem(mesh) -> str | None:
+    """Why the kept engine object no longer belongs to the mesh: its Basis changed since the
+    Decompose. The same report as the reload gives (_decompose_again), so that an edited Basis
+    is refused in the session too instead of being thrown away by a result key. Format 2 only
+    (format 1 keeps the model, and loads it whatever the Basis). 12-20 ms at 1M vertices."""
+    if not has_data(mesh) or "recipe" not in mesh[PROP]:
+        return None
+    recipe = recipes.loads(mesh[PROP]["recipe"])
+    problem = recipes.problem({"points": recipe["points"]}, mesh_io.read_basis(mesh))  # the Basis alone
+    return f"'{mesh.name}': {problem}. {AGAIN}" if problem else None
+
+
 def _decompose_again(mesh, engine, recipe: dict, threads: int):
     """Format 2: the Basis decomposed again with the saved settings, checked to be the saved one."""
-    again = "Decompose again to start from the mesh as it is now"
+    again = AGAIN
     points = mesh_io.read_basis(mesh)
     edges = mesh_io.read_edges(mesh) if "edges" in recipe else None
     problem = recipes.problem(recipe, points, edges)

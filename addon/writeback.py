@@ -55,6 +55,8 @@ def apply_layout(obj, layout, basis=None, kwargs=None, version="", data=None) ->
     except Exception:
         storage.clear(mesh)  # never leave half-written data
         raise
+    # Show Details' colours belong to the decomposition being replaced: give the artist's back.
+    drop_detail_colors(mesh)
     kept = keys.write_layout(obj, data.levels, data.bands, settings.n_bands)
     release_levels(layout.dec)
     token = uuid.uuid4().hex
@@ -81,24 +83,32 @@ def clear(obj) -> list:
     mesh = obj.data
     settings = mesh.multiscale
     k = max(settings.n_bands, 0)
+    groups = keys.owned_groups(mesh, k)  # only these vertex groups are the add-on's to remove
     keys.remove_layout(obj, k)
     storage.clear(mesh)
-    restore_colors(mesh)
-    mesh_io.remove_attributes(mesh, storage.COLOR)
+    drop_detail_colors(mesh)
     notes = []
     folds = obj.vertex_groups.get(keys.FOLDS)
-    if folds is not None:
+    if folds is not None and keys.FOLDS in groups:
         obj.vertex_groups.remove(folds)
+    groups.discard(keys.FOLDS)
     if keys.FOLDS_MARKED in mesh.keys():
         del mesh[keys.FOLDS_MARKED]
-    masks = [keys.mask_name(l) for l in range(k) if obj.vertex_groups.get(keys.mask_name(l)) is not None]
+    masks = [keys.mask_name(l) for l in range(k)
+             if keys.mask_name(l) in groups and obj.vertex_groups.get(keys.mask_name(l)) is not None]
     weights = group_weights.read(obj, masks, len(mesh.vertices)) if masks else []
     painted = []
     for name, w in zip(masks, weights):
         if w is not None and np.all(w == 1.0):
-            obj.vertex_groups.remove(obj.vertex_groups[name])  # as Decompose made it
+            obj.vertex_groups.remove(obj.vertex_groups[name])  # as Paint Band Mask made it
         else:
             painted.append(name)
+    # The painted masks it keeps stay recorded as the add-on's: a later Decompose uses them again.
+    groups = {name for name in groups if obj.vertex_groups.get(name) is not None}
+    if groups:
+        keys.set_owned_groups(mesh, groups)
+    elif keys.GROUPS in mesh.keys():
+        del mesh[keys.GROUPS]
     if painted:
         notes.append(f"kept the painted {', '.join(painted)} (delete them under Vertex Groups if unwanted)")
     if keys.remove_created_basis(obj) is False:
@@ -122,6 +132,25 @@ def remember_colors(mesh) -> None:
     active = colors.active_color.name if colors.active_color is not None else ""
     render = colors[colors.render_color_index].name if 0 <= colors.render_color_index < len(colors) else ""
     mesh[SHOWN_COLORS] = {"active": active, "render": render}
+
+
+def colors_problem(mesh) -> str | None:
+    """Why Show Details cannot write its colours: a colour attribute of the artist's has their name."""
+    if mesh.attributes.get(storage.COLOR) is not None and SHOWN_COLORS not in mesh.keys():
+        return (f"it has an attribute '{storage.COLOR}' of its own, and Show Details writes that name: "
+                "rename it first; nothing was modified")
+    return None
+
+
+def drop_detail_colors(mesh) -> None:
+    """Removes the detail colours of Show Details (only when the add-on wrote them) and gives
+    back the colour attributes that were active and rendered before."""
+    if SHOWN_COLORS not in mesh.keys():
+        return
+    restore_colors(mesh)
+    attr = mesh.attributes.get(storage.COLOR)
+    if attr is not None:
+        mesh.attributes.remove(attr)
 
 
 def restore_colors(mesh) -> None:
@@ -150,8 +179,12 @@ def decomposition(mesh, ps):
     key = _key(mesh)
     dec = _cache.get(key)
     if dec is None:
-        dec = storage.load(mesh, ps, threads=preferences.get().threads)
+        dec = storage.load(mesh, ps, threads=preferences.get().threads)  # checks the Basis itself
         _remember(mesh, key[1], dec)
+    else:
+        problem = storage.basis_problem(mesh)  # as the reload would refuse it
+        if problem:
+            raise ValueError(problem)
     return dec
 
 

@@ -32,7 +32,12 @@ class POINTSCALE_OT_paint_band_mask(DecomposedOperator, bpy.types.Operator):
         if kb is None:
             self.report({"ERROR"}, f"'{obj.name}' has no key '{keys.band_name(self.band)}': Decompose again")
             return {"CANCELLED"}
-        vg = keys.ensure_mask(obj, self.band)
+        try:
+            vg = keys.ensure_mask(obj, self.band)
+        except ValueError as exc:
+            self.report({"ERROR"}, str(exc))
+            self.return_to_mode(obj)
+            return {"CANCELLED"}
         kb.vertex_group = vg.name
         obj.vertex_groups.active_index = vg.index
         if self.enter_paint and not bpy.app.background:
@@ -55,6 +60,7 @@ class POINTSCALE_OT_reset_bands(DecomposedOperator, bpy.types.Operator):
             kb = keys.get(obj.data, keys.band_name(l))
             if kb is not None:
                 kb.value = 0.0
+        self.return_to_mode(obj)
         return {"FINISHED"}
 
 

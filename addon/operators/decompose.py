@@ -12,7 +12,7 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
-from .. import compute, engine, keys, mesh_io, mirror_modifier, preferences, state, writeback
+from .. import compute, engine, keys, mesh_io, mirror_modifier, preferences, state, storage, writeback
 from ..job import Job
 
 
@@ -63,7 +63,11 @@ def _prepare(op, context):
         # get the rest; the panel's setting stays as the artist set it.
         kwargs["levels"], op._levels_note = compute.logic.levels_that_fit(
             len(points), kwargs["levels"], kwargs["decimation"], ps.multiscale.MIN_COARSE_POINTS)
-        problem = keys.layout_problem(mesh, kwargs["levels"] - 1, s.n_bands)
+        k = kwargs["levels"] - 1
+        # Only what the add-on made may be written over: an artist's key, vertex group or
+        # attribute with one of the names it writes is refused, not taken over.
+        problem = (keys.layout_problem(mesh, k, s.n_bands) or keys.groups_problem(obj, k, s.n_bands)
+                   or storage.attributes_problem(mesh, k, preferences.get(context).normal_attributes))
         if problem:
             raise ValueError(problem)
         if s.keep_parts and len(mesh.edges):
@@ -92,7 +96,10 @@ def _computed(ps, points, kwargs, progress=None):
     """Everything but the bpy writes, in the worker thread under the modal: the engine, then the
     keys' float32 arrays and the recipe (the Basis the engine saw and its settings, which the
     .blend keeps to decompose again)."""
-    layout = compute.decompose(ps, points, progress=progress, **kwargs)
+    try:
+        layout = compute.decompose(ps, points, progress=progress, **kwargs)
+    except ValueError as exc:  # the engine's words for Keep Parts Apart, in the panel's
+        raise ValueError(compute.logic.parts_message(str(exc), kwargs["neighbors"], kwargs["levels"])) from None
     return layout, writeback.key_data(layout, points, kwargs, ps.__version__)
 
 

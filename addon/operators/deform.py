@@ -11,13 +11,15 @@ from ._common import DecomposedOperator
 def report_folds(op, obj, folds, done: str) -> None:
     """Say how many points fold (and, with Show Folds, mark them in the 'Folds' vertex group)."""
     settings = obj.data.multiscale
-    if settings.show_folds:
-        keys.show_folds(obj, folds.mask)
+    marked = settings.show_folds and keys.show_folds(obj, folds.mask)
+    if settings.show_folds and not marked:
+        op.report({"WARNING"}, f"'{obj.name}' has a vertex group '{keys.FOLDS}' of its own, which Show Folds "
+                               "leaves alone: rename it to have the folding points marked")
     if folds.count == 0:
         prevented = f" (gain limited at {int(folds.changed.sum())} points)" if settings.prevent_folds and folds.changed.any() else ""
         op.report({"INFO"}, f"{done}; no point folds{prevented}")
         return
-    where = f", marked in the '{keys.FOLDS}' vertex group" if settings.show_folds else ""
+    where = f", marked in the '{keys.FOLDS}' vertex group" if marked else ""
     hint = "" if settings.prevent_folds else "; turn on Prevent Folds, or lower the gains"
     op.report({"WARNING"}, f"{done}; {folds.count} points fold over the base{where}{hint}")
 
@@ -68,12 +70,16 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
         ps = engine.get()
         mesh = obj.data
         try:
+            problem = keys.result_problem(mesh, keys.EDIT, mesh.multiscale.n_bands)
+            if problem:
+                raise ValueError(f"'{obj.name}': {problem}")
             dec = writeback.decomposition(mesh, ps)
             base = mesh_io.read_key(keys.get(mesh, keys.level_name(0)))
             solver = writeback.reconstructor(mesh, ps)
             result, folds = compute.rebuild(solver, dec, base, prevent_folds=mesh.multiscale.prevent_folds)
         except ValueError as exc:
             self.report({"ERROR"}, f"Rebuild detail: {exc}")
+            self.return_to_mode(obj)
             return {"CANCELLED"}
         writeback.show_result(obj, keys.EDIT, result)
         report_folds(self, obj, folds, "Rebuilt the detail")
@@ -102,6 +108,9 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
         mesh = obj.data
         k = mesh.multiscale.n_bands
         try:
+            problem = keys.result_problem(mesh, keys.FILTER, k)
+            if problem:
+                raise ValueError(f"'{obj.name}': {problem}")
             dec = writeback.decomposition(mesh, ps)
             base = mesh_io.read_key(keys.get(mesh, keys.level_name(0)))
             values = keys.band_values(mesh, k)
@@ -111,6 +120,7 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
                                          prevent_folds=mesh.multiscale.prevent_folds)
         except ValueError as exc:
             self.report({"ERROR"}, f"Bake filter: {exc}")
+            self.return_to_mode(obj)
             return {"CANCELLED"}
         writeback.show_result(obj, keys.FILTER, result)
         if self.reset_bands:

@@ -49,11 +49,16 @@ class POINTSCALE_OT_show_details(DecomposedOperator, bpy.types.Operator):
         k = mesh.multiscale.n_bands
         if self.band >= k:
             self.report({"ERROR"}, f"band {self.band} does not exist: '{obj.name}' has bands 0..{k - 1}")
+            self.return_to_mode(obj)
             return {"CANCELLED"}
         try:
+            problem = writeback.colors_problem(mesh)
+            if problem:
+                raise ValueError(problem)
             d = storage.read_details(mesh, self.band)
         except ValueError as exc:
             self.report({"ERROR"}, f"Show Details on '{obj.name}': {exc}")
+            self.return_to_mode(obj)
             return {"CANCELLED"}
         writeback.remember_colors(mesh)
         rgba = logic.detail_colors(d, self.scale or None)
@@ -64,6 +69,7 @@ class POINTSCALE_OT_show_details(DecomposedOperator, bpy.types.Operator):
         mesh.multiscale.detail_band = self.band
         mesh.update()
         _show_attribute_colors(context)
+        self.return_to_mode(obj)
         return {"FINISHED"}
 
 
