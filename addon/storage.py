@@ -63,6 +63,7 @@ def store(mesh, dec, details=None, normals=None, recipe=None, sheet_normals=None
                 write(f"{NORMAL}{l}", "FLOAT_VECTOR", normals[l])
         if recipe is not None:
             mesh[PROP] = {"format": FORMAT, "n": n, "k": k, "recipe": recipes.dumps(recipe)}
+        mesh[PROP]["normals"] = normals is not None  # whether the ms_normal_ columns are the add-on's
     except Exception:
         _remove(mesh, written)
         raise
@@ -74,7 +75,9 @@ def attribute_names(mesh) -> list:
         return []
     info = mesh[PROP]
     k = int(info.get("k", 0))
-    names = [ORDER, SHEET_NORMALS] + [f"{DETAIL}{l}" for l in range(k)] + [f"{NORMAL}{l}" for l in range(k)]
+    names = [ORDER, SHEET_NORMALS] + [f"{DETAIL}{l}" for l in range(k)]
+    if info.get("normals", True):  # stores that do not say are taken to have written them, as before
+        names += [f"{NORMAL}{l}" for l in range(k)]
     if "meta" in info:  # format 1: the model's columns
         names += [HIDDEN + name for name in logic.column_names(json.loads(info["meta"]))]
     return names

@@ -106,6 +106,23 @@ def test_the_artists_attributes_with_the_add_ons_prefixes_survive():
     assert np.array_equal(h.snapshot(obj)["attr:ms_detail_sculpt"], values)
 
 
+def test_an_artists_normal_named_attribute_survives_when_the_add_on_writes_no_normals():
+    """By default the add-on writes no ms_normal_<l> columns, so an artist's own of that name is
+    not its to remove, by Clear or by the Clear a second Decompose does."""
+    obj = sphere()
+    mesh = obj.data
+    values = np.arange(3 * len(mesh.vertices), dtype=np.float32)
+    mesh.attributes.new("ms_normal_0", "FLOAT_VECTOR", "POINT").data.foreach_set("vector", values)
+    h.decompose(obj)
+    h.decompose(obj, levels=3)
+    assert bpy.ops.pointscale.clear() == {"FINISHED"}
+    kept = mesh.attributes.get("ms_normal_0")
+    assert kept is not None
+    got = np.empty(3 * len(mesh.vertices), dtype=np.float32)
+    kept.data.foreach_get("vector", got)
+    assert np.array_equal(got, values)
+
+
 def test_an_artists_attribute_with_a_detail_name_is_refused():
     obj = sphere()
     obj.data.attributes.new("ms_detail_1", "FLOAT", "POINT")

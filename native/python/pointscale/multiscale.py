@@ -1,6 +1,7 @@
 """The multiscale representation: decompose, reconstruct, blend, save and load (paper Sec. 4-7)."""
 from __future__ import annotations
 
+import contextvars
 import json
 import math
 import os
@@ -471,7 +472,14 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     return dec
 
 
+# Set while a part is decomposed alone: the sides were checked on the whole model, and a part's
+# warnings are not shown.
+_SIDES_CHECKED = contextvars.ContextVar("pointscale_sides_checked", default=False)
+
+
 def _warn_estimated_sides(p, threads) -> None:
+    if _SIDES_CHECKED.get():
+        return
     from .sheets import estimated_sides_warning
     message = estimated_sides_warning(p, threads)
     if message:
@@ -494,7 +502,11 @@ def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> 
     def decompose_one(points, part_normals, part_levels, part_progress):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the parts' warnings are summed up below
-            return decompose(points, part_levels, normals=part_normals, progress=part_progress, **options)
+            checked = _SIDES_CHECKED.set(True)  # decompose() checked the whole model's sides
+            try:
+                return decompose(points, part_levels, normals=part_normals, progress=part_progress, **options)
+            finally:
+                _SIDES_CHECKED.reset(checked)
 
     arrays, stats, reports = decompose_parts(p, n_arr, labels, count, levels, decimation, neighbors,
                                              MIN_COARSE_POINTS, decompose_one, progress, origin,

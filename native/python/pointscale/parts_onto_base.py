@@ -55,14 +55,16 @@ def matched_parts(a: np.ndarray, b: np.ndarray, faces_a, edges_a, faces_b, edges
 
 
 def _part_sizes(p: np.ndarray, labels: np.ndarray, count: int):
-    """Each part's (points, first vertex, bounding-box diagonal as a share of the model's)."""
+    """Each part's (points, first vertex, bounding-box diagonal as a share of the model's), in one
+    pass over the points (a model may hold thousands of parts)."""
     whole = max(float(np.linalg.norm(p.max(axis=0) - p.min(axis=0))), np.finfo(float).tiny)
-    out = []
-    for part in range(count):
-        idx = np.flatnonzero(labels == part)
-        q = p[idx]
-        out.append((len(idx), int(idx[0]), float(np.linalg.norm(q.max(axis=0) - q.min(axis=0))) / whole))
-    return out
+    order = np.argsort(labels, kind="stable")
+    sizes = np.bincount(labels, minlength=count)
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    q = p[order]
+    lo, hi = np.minimum.reduceat(q, starts, axis=0), np.maximum.reduceat(q, starts, axis=0)
+    diagonals = np.linalg.norm(hi - lo, axis=1) / whole
+    return [(int(sizes[i]), int(order[starts[i]]), float(diagonals[i])) for i in range(count)]
 
 
 def pairing_warning(a, labels_a, b, labels_b, count: int) -> str | None:
@@ -81,7 +83,9 @@ def pairing_warning(a, labels_a, b, labels_b, count: int) -> str | None:
 
     named = "; ".join(f"{said('A', i, sa[i])} with {said('B', i, sb[i])}" for i in bad[:5])
     more = f"; and {len(bad) - 5} more" if len(bad) > 5 else ""
-    by_size = [int(np.argmin([abs(np.log(max(x[2], tiny) / max(y[2], tiny))) for y in sb])) for x in sa]
+    # The pairing by size compares every part of A with every part of B: said up to 2000 parts.
+    ra, rb = (np.maximum([x[2] for x in s], tiny) for s in (sa, sb))
+    by_size = np.abs(np.log(ra[:, None] / rb[None, :])).argmin(axis=1).tolist() if count <= 2000 else []
     hint = ""
     if len(set(by_size)) == count and by_size != list(range(count)):
         pairs = ", ".join(f"A's {i} with B's {j}" for i, j in enumerate(by_size) if i != j)

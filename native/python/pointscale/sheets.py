@@ -52,7 +52,7 @@ def estimated_sides_warning(points: np.ndarray, threads: int = 0) -> str | None:
     q = (points - 0.5 * (points.min(axis=0) + points.max(axis=0))).astype(np.float32)
     n32 = normals.astype(np.float32)
     # The verdict is a majority: every point, up to SIDES_SAMPLE of them evenly spread over the input.
-    sample = np.arange(0, len(q), max(1, len(q) // SIDES_SAMPLE))
+    sample = np.unique(np.linspace(0, len(q) - 1, min(len(q), SIDES_SAMPLE)).astype(np.int64))
     same = away = 0
     for start in range(0, len(sample), 32768):  # a block at a time: (rows, k, 3) arrays
         at = sample[start:start + 32768]
