@@ -30,33 +30,23 @@ def reconstruct_with_normals(dec, gains, base, threads: int, progress):
     return levels[-1], normals[-1]
 
 
+def free_names(scan, names: tuple[str, ...]) -> tuple[str, ...]:
+    """`names` when the input has no vertex attribute of any of them; else the first of
+    pointscale_<names>, pointscale_<names>_2, ... it has none of, so that the input's own
+    attributes keep their names and values."""
+    candidates, number = names, 1
+    while any(name in scan.vertex_attributes for name in candidates):
+        candidates = tuple(f"pointscale_{name}" + ("" if number == 1 else f"_{number}") for name in names)
+        number += 1
+    return candidates
+
+
 def detail_attribute_name(scan) -> str:
     """'detail', or the first of pointscale_detail, pointscale_detail_2, ... the input lacks."""
-    name, number = "detail", 1
-    while name in scan.vertex_attributes:
-        number += 1
-        name = "pointscale_detail" if number == 2 else f"pointscale_detail_{number - 1}"
-    return name
+    return free_names(scan, ("detail",))[0]
 
 
 NORMAL_NAMES = ("nx", "ny", "nz")
-
-
-def normal_attribute_names(scan) -> tuple[str, str, str] | None:
-    """None when the level's normals can go under nx, ny, nz; else, when the input keeps vertex
-    attributes of those names (a lone nx, quantised int16 normals, LAS extra bytes: anything
-    but a float triple, which the readers take as the normals), the first of (pointscale_nx,
-    pointscale_ny, pointscale_nz), (pointscale_nx_2, ...) ... the input lacks, as for detail."""
-    taken = scan.vertex_attributes
-    if not any(name in taken for name in NORMAL_NAMES):
-        return None
-    number = 1
-    while True:
-        suffix = "" if number == 1 else f"_{number}"
-        names = tuple(f"pointscale_{axis}{suffix}" for axis in NORMAL_NAMES)
-        if not any(name in taken for name in names):
-            return names
-        number += 1
 
 
 # Formats with room for a vertex scalar of our own; the others would drop the detail with a warning.
@@ -72,10 +62,11 @@ def level_scan(template, points: np.ndarray, normals: np.ndarray, detail, extens
     input's own attributes keep their names and values: the level's normals and detail go under
     other names where the input already uses nx, ny, nz or detail."""
     dtype = np.float64 if np.dtype(template.precision) == np.float64 else np.float32
-    renamed = normal_attribute_names(template) if extension in FORMATS_NAMING_NORMALS else None
+    names = free_names(template, NORMAL_NAMES) if extension in FORMATS_NAMING_NORMALS else NORMAL_NAMES
+    renamed = names != NORMAL_NAMES  # the input keeps its own nx, ny or nz (not a float triple)
     scan = template.with_geometry(points, None if renamed else normals)
     if renamed:
-        for axis, name in enumerate(renamed):
+        for axis, name in enumerate(names):
             scan.vertex_attributes[name] = np.asarray(normals[:, axis], dtype=dtype)
     if detail is not None and extension in FORMATS_WITH_VERTEX_SCALARS:
         scan.vertex_attributes[detail_attribute_name(template)] = np.asarray(detail, dtype=dtype)
