@@ -93,9 +93,11 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   std::vector<HangFromFoot> hang;
   if (turned) hang = hang_from_feet(model.base, p, ws.edit.feet, ws.rotation);
   Points& fitted = turned ? ws.unedited : p;  // the level each level's normals are fitted to
-  // Normals fitted once for these gains are reused (they do not depend on the edit).
-  const bool cache = turned && ws.kept;
-  const bool cached = cache && ws.unedited_normals.size() >= static_cast<std::size_t>(upto) &&
+  // Normals fitted once for these gains are reused (they do not depend on the edit): kept
+  // between calls by a Reconstructor, or handed over by the unedited pass before this one.
+  // An unedited pass asked for its normals (ws.keep_unedited) leaves them in the same place.
+  const bool cache = (turned && ws.kept) || (!edited && ws.keep_unedited);
+  const bool cached = turned && ws.unedited_normals.size() >= static_cast<std::size_t>(upto) &&
                       ws.unedited_gains.rows() == gains.rows() && ws.unedited_gains.cols() == gains.cols() &&
                       (ws.unedited_gains.array() == gains.array()).all();
   if (turned && !cached) ws.unedited = model.base;
@@ -103,6 +105,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
     ws.unedited_gains.resize(0, 0);  // valid again only once every level is in
     ws.unedited_normals.resize(static_cast<std::size_t>(k));
   }
+  if (turned && !cached && !ws.kept) std::vector<Points>().swap(ws.unedited_normals);  // other gains: of no use
   if (kept) kept->levels.push_back(p);
   // Level l's normals orient level l + 1's. They are computed into whichever of two buffers
   // the level before does not hold, so each level reuses the storage of the one before it.
@@ -146,7 +149,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   }
   if (!hang.empty()) turn_towards_feet(hang, p, kept);
   if (cache && !cached && upto == k) ws.unedited_gains = gains;
-  if (cache) Points().swap(ws.unedited);  // only fitting needs it, and the normals are kept
+  if (turned) Points().swap(ws.unedited);  // only fitting needs it, and the normals are kept
   return report;
 }
 
@@ -168,8 +171,13 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
   if (edited && p.rows() == model.base.rows() && p == model.base) edited = false;
   ReconstructionWorkspace workspace;
   if (edited && upto != 0 && model.bands() > 0) {
+    // The feet need the unedited finest level; the pass that makes it fits the stored base's
+    // level normals at unit gains, which are the ones the edited pass fits at those gains.
     const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
-    const Points finest = reconstruct_levels(model, ones, model.base, false, false, -1, nullptr).positions;
+    Points finest = model.base;
+    workspace.keep_unedited = true;
+    reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, nullptr, workspace);
+    workspace.keep_unedited = false;
     workspace.edit = edit_support(model.base, model.parts, model.base_normals, finest);
   }
   Reconstruction out;

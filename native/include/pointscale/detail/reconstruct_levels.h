@@ -37,6 +37,9 @@ struct ReconstructionWorkspace {
   Eigen::MatrixXd unedited_gains;
   std::vector<Points> unedited_normals;
   bool kept = false;  // kept between calls: the unedited normals are worth keeping
+  // An unedited pass leaves its level normals in unedited_normals, with its gains, for the
+  // edited pass after it (reconstruct() on an edited base runs one first, for the feet).
+  bool keep_unedited = false;
 };
 
 // The level loop that reconstruct(), reconstruct_from_base() and Reconstructor run, on p (P^0 in, the finest level
