@@ -1,6 +1,8 @@
 // Morphing through a common base surface (Sec. 8.3, Eq. 22): both models are projected onto the
 // base, and B's normal offsets are carried onto A's samples by k-nearest-neighbour interpolation,
-// so p_i(alpha, beta) = p_i + (alpha d_i^A + beta d_i^B) n_i.
+// so p_i(alpha, beta) = p_i + (alpha d_i^A + beta d_i^B) n_i. Where both fold over the base,
+// so that the neighbours come from two or more sheets of each, only the sheet of B matching
+// A's sample is interpolated: the same rank along the normal, or the nearest.
 #pragma once
 #include "pointscale/mls_projection.h"
 
