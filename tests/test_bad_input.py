@@ -384,6 +384,11 @@ def test_a_progress_callback_returning_a_non_bool_is_a_value_error(dec, returned
              lambda cb: ps.project(GOOD, GOOD[::3], progress=cb),
              lambda cb: ps.smooth_diffusion(GOOD, 50, progress=cb),
              lambda cb: ps.reconstruct(dec, base=dec.base, progress=cb)]
+    # A Reconstructor's second call on an edited base finds every level's normals cached: its
+    # callback is still called (once per level), so it is still checked and can still cancel.
+    kept = ps.Reconstructor(dec)
+    kept.reconstruct(base=dec.base * 1.01)
+    calls.append(lambda cb: kept.reconstruct(base=dec.base * 1.01, progress=cb))
     for call in calls:
         with pytest.raises(ValueError, match="progress must return"):
             call(lambda fraction: returned)

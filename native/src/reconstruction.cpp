@@ -72,11 +72,10 @@ void turn_towards_feet(const std::vector<HangFromFoot>& hang, Points& p, Reconst
 
 EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p,
                                                bool edited, Reconstruction* kept, int upto,
-                                               const ProgressCallback* progress, ReconstructionWorkspace& ws) {
+                                               const ProgressStage& all, ReconstructionWorkspace& ws) {
   const int k = model.bands();
   if (upto < 0 || upto > k) upto = k;
   const bool per_point = gains.cols() > 1;
-  const ProgressStage all{progress, 0.0, 1.0};
   EditRotationReport report;
   // An edited base: each point's turn, and the levels of the stored base built beside the
   // edited ones. Their normals, turned, are the edited levels' normals; with nothing edited
@@ -146,6 +145,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
     }, {}, 4096);
     if (kept) { kept->levels.push_back(p); kept->normals.push_back(turned ? std::move(applied) : nrm); }
     previous = normals;
+    stage.report(1.0);
   }
   if (!hang.empty()) turn_towards_feet(hang, p, kept);
   if (cache && !cached && upto == k) ws.unedited_gains = gains;
@@ -166,6 +166,7 @@ namespace {
 
 Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points p, bool edited,
                                   bool keep_levels, int upto, const ProgressCallback* progress) {
+  const ProgressStage all{progress, 0.0, 1.0};
   // A base handed back unchanged turns no detail: the unedited path gives the same points bit
   // for bit, without finding the edit support.
   if (edited && p.rows() == model.base.rows() && p == model.base) edited = false;
@@ -176,12 +177,14 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
     const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
     Points finest = model.base;
     workspace.keep_unedited = true;
-    reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, nullptr, workspace);
+    reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, all.sub(0.0, 0.5), workspace);
     workspace.keep_unedited = false;
     workspace.edit = edit_support(model.base, model.parts, model.base_normals, finest);
+    all.report(0.75);  // the edit support costs about what the unedited pass does
   }
   Reconstruction out;
-  out.edit = reconstruct_levels_in_place(model, gains, p, edited, keep_levels ? &out : nullptr, upto, progress,
+  const ProgressStage rest = all.sub(edited && upto != 0 && model.bands() > 0 ? 0.75 : 0.0, 1.0);
+  out.edit = reconstruct_levels_in_place(model, gains, p, edited, keep_levels ? &out : nullptr, upto, rest,
                                          workspace);
   out.positions = std::move(p);
   return out;

@@ -105,7 +105,7 @@ void Reconstructor::State::find_edit_support() {
   // for bit, in this order.
   Points finest = model.base;
   const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
-  reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, nullptr, workspace);
+  reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, ProgressStage{}, workspace);
   const EditSupport from = edit_support(in_model_order(model.base, order), parts,
                                         in_model_order(model.base_normals, order), in_model_order(finest, order));
   EditSupport& to = workspace.edit;
@@ -156,7 +156,7 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
     }, {}, 4096);
     g = &s.gains;
   }
-  reconstruct_levels_in_place(s.model, *g, s.level, edited, nullptr, -1, progress, s.workspace);
+  reconstruct_levels_in_place(s.model, *g, s.level, edited, nullptr, -1, ProgressStage{progress, 0.0, 1.0}, s.workspace);
   Points out(n, 3);
   const Eigen::RowVector3d shift = origin.transpose();
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {

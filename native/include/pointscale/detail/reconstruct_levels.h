@@ -46,10 +46,11 @@ struct ReconstructionWorkspace {
 // out). edited: p may differ from the stored base, so the levels of the stored base are built
 // beside it, and each level's normals, fitted there, are turned by the edit's rotation at each
 // point; kept: receives every level and its normals when not null; workspace: the storage,
-// which must hold the edit support when edited (its feet sized #P). Returns how the edit's
-// turns were measured.
+// which must hold the edit support when edited (its feet sized #P); progress: reported at
+// least once per level, so a callback can cancel (and is checked) even where every level's
+// normals are cached. Returns how the edit's turns were measured.
 EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p,
                                                bool edited, Reconstruction* kept, int upto,
-                                               const ProgressCallback* progress, ReconstructionWorkspace& workspace);
+                                               const ProgressStage& progress, ReconstructionWorkspace& workspace);
 
 }  // namespace pointscale
