@@ -96,6 +96,20 @@ def test_a_reconstructor_finds_the_edit_support_on_its_first_edited_call(case):
         assert np.array_equal(solver.reconstruct(gains, wave), ps.reconstruct(dec, gains, wave)), gains
 
 
+def test_a_reconstructor_cancelled_while_finding_the_edit_support_is_still_right(case):
+    # Blender's first Rebuild Detail finds the edit support: it reports progress and can be
+    # cancelled there. Nothing half-found may stay behind for the next call.
+    points, dec = case
+    solver = ps.Reconstructor(dec)
+    wave = dec.base + 0.05 * diagonal(points) * np.sin(dec.base[:, [1, 2, 0]] * 3.0)
+    seen = []
+    with pytest.raises(ps.Cancelled):
+        solver.reconstruct([1.0, 2.0, 1.0], wave, progress=lambda f: seen.append(f) or f < 0.3)
+    assert 0.0 < seen[-1] < 2.0 / 3.0  # stopped while finding the support, before the levels
+    for gains in ([1.0, 2.0, 1.0], None):
+        assert np.array_equal(solver.reconstruct(gains, wave), ps.reconstruct(dec, gains, wave)), gains
+
+
 def test_zero_gains_give_the_base(case):
     points, dec = case
     assert np.array_equal(ps.reconstruct(dec, gains=np.zeros(3)), dec.base)

@@ -20,7 +20,7 @@ struct Reconstructor::State {
 
   // What an edit needs (EditSupport), found in the model's own numbering, so that rings with
   // neighbours at equal distances list them as reconstruct() does, then renumbered.
-  void find_edit_support();
+  void find_edit_support(const ProgressStage& progress);
 };
 
 namespace {
@@ -98,14 +98,14 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) : state_(std::make_un
   }
 }
 
-void Reconstructor::State::find_edit_support() {
+void Reconstructor::State::find_edit_support(const ProgressStage& progress) {
   const Eigen::Index n = model.base.rows();
   const IndexList rank = inverse_order(order);
   // The unedited finest level, as reconstruct() finds it: this model's level loop gives it bit
   // for bit, in this order.
   Points finest = model.base;
   const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
-  reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, ProgressStage{}, workspace);
+  reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, progress.sub(0.0, 0.5), workspace);
   const EditSupport from = edit_support(in_model_order(model.base, order), parts,
                                         in_model_order(model.base_normals, order), in_model_order(finest, order));
   EditSupport& to = workspace.edit;
@@ -124,6 +124,7 @@ void Reconstructor::State::find_edit_support() {
       to.planes.kind[r] = from.planes.kind[i];
     }
   }, {}, 4096);
+  progress.report(1.0);
 }
 
 Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* base, const Vec3& origin,
@@ -146,8 +147,14 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
   } else {
     s.level = s.model.base;
   }
-  if (edited && s.model.bands() > 0 && s.workspace.edit.feet.size() != static_cast<std::size_t>(n))
-    s.find_edit_support();
+  // The first edited call finds the edit support too, which costs about twice the levels: it
+  // takes the first two thirds of the progress.
+  const ProgressStage all{progress, 0.0, 1.0};
+  ProgressStage levels = all;
+  if (edited && s.model.bands() > 0 && s.workspace.edit.feet.size() != static_cast<std::size_t>(n)) {
+    s.find_edit_support(all.sub(0.0, 2.0 / 3.0));
+    levels = all.sub(2.0 / 3.0, 1.0);
+  }
   const Eigen::MatrixXd* g = &gains;
   if (gains.cols() > 1) {
     s.gains.resize(gains.rows(), n);
@@ -156,7 +163,7 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
     }, {}, 4096);
     g = &s.gains;
   }
-  reconstruct_levels_in_place(s.model, *g, s.level, edited, nullptr, -1, ProgressStage{progress, 0.0, 1.0}, s.workspace);
+  reconstruct_levels_in_place(s.model, *g, s.level, edited, nullptr, -1, levels, s.workspace);
   Points out(n, 3);
   const Eigen::RowVector3d shift = origin.transpose();
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
