@@ -96,18 +96,40 @@ def test_a_reconstructor_finds_the_edit_support_on_its_first_edited_call(case):
         assert np.array_equal(solver.reconstruct(gains, wave), ps.reconstruct(dec, gains, wave)), gains
 
 
-def test_a_reconstructor_cancelled_while_finding_the_edit_support_is_still_right(case):
-    # Blender's first Rebuild Detail finds the edit support: it reports progress and can be
-    # cancelled there. Nothing half-found may stay behind for the next call.
+@pytest.mark.parametrize("stop_below", [0.0, 0.6])
+def test_a_reconstructor_cancelled_on_its_first_edited_call_is_still_right(case, stop_below):
+    # Blender's first Rebuild Detail finds the edit support: it reports progress there and can
+    # be cancelled. Cancelled at the first report (inside the unedited pass), or just as the
+    # support is complete (2/3), nothing half-found may stay behind for the next call.
     points, dec = case
     solver = ps.Reconstructor(dec)
     wave = dec.base + 0.05 * diagonal(points) * np.sin(dec.base[:, [1, 2, 0]] * 3.0)
     seen = []
     with pytest.raises(ps.Cancelled):
-        solver.reconstruct([1.0, 2.0, 1.0], wave, progress=lambda f: seen.append(f) or f < 0.3)
-    assert 0.0 < seen[-1] < 2.0 / 3.0  # stopped while finding the support, before the levels
+        solver.reconstruct([1.0, 2.0, 1.0], wave, progress=lambda f: seen.append(f) or f < stop_below)
+    if stop_below == 0.0:
+        assert len(seen) == 1 and 0.0 < seen[0] < 1.0 / 3.0  # within the unedited pass
+    else:
+        assert seen[-1] == pytest.approx(2.0 / 3.0) and max(seen[:-1]) < stop_below
     for gains in ([1.0, 2.0, 1.0], None):
         assert np.array_equal(solver.reconstruct(gains, wave), ps.reconstruct(dec, gains, wave)), gains
+
+
+def test_progress_on_an_edited_base_rises_to_one(case):
+    # reconstruct() and a Reconstructor's first and later calls each report fractions that
+    # never go back, and end at 1 (a progress bar that jumps back or stops short looks broken).
+    points, dec = case
+    solver = ps.Reconstructor(dec)
+    wave = dec.base + 0.05 * diagonal(points) * np.sin(dec.base[:, [1, 2, 0]] * 3.0)
+    calls = [lambda cb: ps.reconstruct(dec, None, wave, progress=cb),
+             lambda cb: ps.reconstruct(dec, [1.0, 2.0, 1.0], wave, progress=cb),
+             lambda cb: solver.reconstruct(None, wave, progress=cb),
+             lambda cb: solver.reconstruct(None, wave, progress=cb),
+             lambda cb: solver.reconstruct([1.0, 2.0, 1.0], wave, progress=cb)]
+    for n, call in enumerate(calls):
+        seen = []
+        call(seen.append)
+        assert seen and np.all(np.diff(seen) >= 0.0) and 0.0 <= seen[0] and seen[-1] == 1.0, (n, seen)
 
 
 def test_zero_gains_give_the_base(case):

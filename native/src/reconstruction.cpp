@@ -149,7 +149,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   }
   if (!hang.empty()) turn_towards_feet(hang, p, kept);
   if (cache && !cached && upto == k) ws.unedited_gains = gains;
-  if (turned) Points().swap(ws.unedited);  // only fitting needs it, and the normals are kept
+  if (turned) Points().swap(ws.unedited);  // only fitting the normals needs it
   return report;
 }
 
@@ -171,19 +171,23 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
   // for bit, without finding the edit support.
   if (edited && p.rows() == model.base.rows() && p == model.base) edited = false;
   ReconstructionWorkspace workspace;
-  if (edited && upto != 0 && model.bands() > 0) {
-    // The feet need the unedited finest level; the pass that makes it fits the stored base's
-    // level normals at unit gains, which are the ones the edited pass fits at those gains.
+  // An edit turns detail only where there is detail to turn. Finding what it needs costs about
+  // two passes over the levels (the unedited one and the edit support): two thirds of the progress.
+  const bool turns = edited && upto != 0 && model.bands() > 0;
+  if (turns) {
+    // The feet need the unedited finest level. The pass that makes it fits the stored base's
+    // level normals at unit gains, which are the ones the edited pass fits at those gains: it
+    // keeps them for that pass then (at other gains they are of no use, and cost memory).
     const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
     Points finest = model.base;
-    workspace.keep_unedited = true;
-    reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, all.sub(0.0, 0.5), workspace);
+    workspace.keep_unedited = gains.cols() == 1 && (gains.array() == 1.0).all();
+    reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, all.sub(0.0, 1.0 / 3.0), workspace);
     workspace.keep_unedited = false;
     workspace.edit = edit_support(model.base, model.parts, model.base_normals, finest);
-    all.report(0.75);  // the edit support costs about what the unedited pass does
+    all.report(2.0 / 3.0);
   }
   Reconstruction out;
-  const ProgressStage rest = all.sub(edited && upto != 0 && model.bands() > 0 ? 0.75 : 0.0, 1.0);
+  const ProgressStage rest = all.sub(turns ? 2.0 / 3.0 : 0.0, 1.0);
   out.edit = reconstruct_levels_in_place(model, gains, p, edited, keep_levels ? &out : nullptr, upto, rest,
                                          workspace);
   out.positions = std::move(p);

@@ -102,13 +102,18 @@ void Reconstructor::State::find_edit_support(const ProgressStage& progress) {
   const Eigen::Index n = model.base.rows();
   const IndexList rank = inverse_order(order);
   // The unedited finest level, as reconstruct() finds it: this model's level loop gives it bit
-  // for bit, in this order.
+  // for bit, in this order. Its level normals are those of unit gains, kept for the edited calls
+  // at those gains (the cache holds one set of gains' normals anyway).
   Points finest = model.base;
   const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
+  workspace.keep_unedited = true;
   reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, progress.sub(0.0, 0.5), workspace);
+  workspace.keep_unedited = false;
   const EditSupport from = edit_support(in_model_order(model.base, order), parts,
                                         in_model_order(model.base_normals, order), in_model_order(finest, order));
-  EditSupport& to = workspace.edit;
+  // Renumbered into a support of its own, which becomes the workspace's only once complete: a
+  // call that fails on the way leaves none, and the next call finds it again.
+  EditSupport to;
   const std::size_t ring = static_cast<std::size_t>(from.ring_size);
   to.ring_size = from.ring_size;
   to.rings.resize(from.rings.size());
@@ -124,6 +129,7 @@ void Reconstructor::State::find_edit_support(const ProgressStage& progress) {
       to.planes.kind[r] = from.planes.kind[i];
     }
   }, {}, 4096);
+  workspace.edit = std::move(to);
   progress.report(1.0);
 }
 
