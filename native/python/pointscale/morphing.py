@@ -64,10 +64,11 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_sam
                         and evaluate(0, 1) puts B back where it lies.
     Both are projected onto the base; B's offsets are carried onto A's samples by Gaussian-weighted
     interpolation over the interpolation_neighbors nearest projected B samples. Where B folds over
-    the base (ears over an ellipsoid), those samples come from several sheets of B (two are on one
-    sheet when their offsets differ by at most twice the distance of their feet). Where A folds
-    there too, into as many sheets, each A sample takes B's sheet of the same rank along the
-    normal; into another number, the sheet nearest to its own point; where A does not fold, all.
+    the base (ears over an ellipsoid), those samples come from several sheets of B (one sheet:
+    joined by a chain of samples whose offsets differ by at most twice the distance of their
+    feet). Where A folds there too, into as many sheets, each A sample takes B's sheet of the same
+    rank along the normal; into another number, the sheet of the B sample whose offset is nearest
+    its own; where A does not fold, all.
     faces_a, edges_a, faces_b, edges_b  optional connectivity of both models: part i of A is then
                         morphed into part i of B alone (parts numbered by their lowest vertex, so
                         two versions of one mesh match), and B's offsets never cross from one
