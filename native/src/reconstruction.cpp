@@ -72,7 +72,8 @@ void turn_towards_feet(const std::vector<HangFromFoot>& hang, Points& p, Reconst
 
 EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p,
                                                bool edited, Reconstruction* kept, int upto,
-                                               const ProgressStage& all, ReconstructionWorkspace& ws) {
+                                               const ProgressStage& all, ReconstructionWorkspace& ws,
+                                               bool keep_normals) {
   const int k = model.bands();
   if (upto < 0 || upto > k) upto = k;
   const bool per_point = gains.cols() > 1;
@@ -94,8 +95,8 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   Points& fitted = turned ? ws.unedited : p;  // the level each level's normals are fitted to
   // Normals fitted once for these gains are reused (they do not depend on the edit): kept
   // between calls by a Reconstructor, or handed over by the unedited pass before this one.
-  // An unedited pass asked for its normals (ws.keep_unedited) leaves them in the same place.
-  const bool cache = (turned && ws.kept) || (!edited && ws.keep_unedited);
+  // An unedited pass asked for its normals (keep_normals) leaves them in the same place.
+  const bool cache = (turned && ws.kept) || (!edited && keep_normals);
   const bool cached = turned && ws.unedited_normals.size() >= static_cast<std::size_t>(upto) &&
                       ws.unedited_gains.rows() == gains.rows() && ws.unedited_gains.cols() == gains.cols() &&
                       (ws.unedited_gains.array() == gains.array()).all();
@@ -180,9 +181,9 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
     // keeps them for that pass then (at other gains they are of no use, and cost memory).
     const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
     Points finest = model.base;
-    workspace.keep_unedited = gains.cols() == 1 && (gains.array() == 1.0).all();
-    reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, all.sub(0.0, 1.0 / 3.0), workspace);
-    workspace.keep_unedited = false;
+    const bool unit_gains = gains.cols() == 1 && (gains.array() == 1.0).all();
+    reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, all.sub(0.0, 1.0 / 3.0), workspace,
+                                unit_gains);
     workspace.edit = edit_support(model.base, model.parts, model.base_normals, finest);
     all.report(2.0 / 3.0);
   }

@@ -106,18 +106,7 @@ void Reconstructor::State::find_edit_support(const ProgressStage& progress) {
   // at those gains (the cache holds one set of gains' normals anyway).
   Points finest = model.base;
   const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
-  {
-    // Set for this pass only, also when it is cancelled: an unedited call after it must not
-    // keep its normals.
-    struct KeepUnedited {
-      ReconstructionWorkspace& ws;
-      explicit KeepUnedited(ReconstructionWorkspace& w) : ws(w) { ws.keep_unedited = true; }
-      ~KeepUnedited() { ws.keep_unedited = false; }
-      KeepUnedited(const KeepUnedited&) = delete;
-      KeepUnedited& operator=(const KeepUnedited&) = delete;
-    } keep(workspace);
-    reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, progress.sub(0.0, 0.5), workspace);
-  }
+  reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, progress.sub(0.0, 0.5), workspace, true);
   const EditSupport from = edit_support(in_model_order(model.base, order), parts,
                                         in_model_order(model.base_normals, order), in_model_order(finest, order));
   // Renumbered into a support of its own, which becomes the workspace's only once complete: a

@@ -76,8 +76,8 @@ int label_sheets(const Points& feet, const Eigen::VectorXd& offsets, const Index
 Eigen::VectorXd offsets_on_matching_sheets(const Points& from, const Eigen::VectorXd& values, const Points& to,
                                            const Eigen::VectorXd& to_values, int k, const ProgressStage& stage) {
   const SpatialIndex index(from), own(to);
+  const int k_own = std::min<int>(k, own.size());  // A's own neighbourhood, however few B has
   k = std::min<int>(k, index.size());
-  const int k_own = std::min<int>(k, own.size());
   Eigen::VectorXd out(to.rows());
   parallel_for(static_cast<std::size_t>(to.rows()), [&](std::size_t b, std::size_t e) {
     std::vector<Index> idx(k), own_idx(k_own);

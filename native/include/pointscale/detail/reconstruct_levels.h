@@ -37,9 +37,6 @@ struct ReconstructionWorkspace {
   Eigen::MatrixXd unedited_gains;
   std::vector<Points> unedited_normals;
   bool kept = false;  // kept between calls: the unedited normals are worth keeping
-  // An unedited pass leaves its level normals in unedited_normals, with its gains, for the
-  // edited pass after it (reconstruct() on an edited base runs one first, for the feet).
-  bool keep_unedited = false;
 };
 
 // The level loop that reconstruct(), reconstruct_from_base() and Reconstructor run, on p (P^0 in, the finest level
@@ -48,9 +45,13 @@ struct ReconstructionWorkspace {
 // point; kept: receives every level and its normals when not null; workspace: the storage,
 // which must hold the edit support when edited (its feet sized #P); progress: reported at
 // least once per level, so a callback can cancel (and is checked) even where every level's
-// normals are cached. Returns how the edit's turns were measured.
+// normals are cached; keep_normals: an unedited pass leaves its level normals in the
+// workspace's unedited_normals, with its gains, for an edited pass after it at those gains
+// (an edited base needs an unedited pass first, for the feet). Returns how the edit's turns
+// were measured.
 EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p,
                                                bool edited, Reconstruction* kept, int upto,
-                                               const ProgressStage& progress, ReconstructionWorkspace& workspace);
+                                               const ProgressStage& progress, ReconstructionWorkspace& workspace,
+                                               bool keep_normals = false);
 
 }  // namespace pointscale
