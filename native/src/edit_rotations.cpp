@@ -20,6 +20,33 @@ IndexList base_rings(const Points& base, const IndexList& parts, int size) {
   return parts.empty() ? knn_graph(SpatialIndex(base), width) : knn_within_parts(base, parts, width);
 }
 
+namespace {
+
+// Walks the rings downhill from start, step by step to the ring point that lowers cost the most
+// among those allowed, until none does (at most 16 steps): on a smooth base that finds the best
+// allowed point near start with no search of the whole base.
+template <class Cost, class Allowed>
+Index walk_rings(const IndexList& rings, std::size_t ring, Index start, double cost_here, Cost cost, Allowed allowed) {
+  Index here = start;
+  for (int step = 0; step < 16; ++step) {
+    Index next = here;
+    const Index* r = rings.data() + static_cast<std::size_t>(here) * ring;
+    for (std::size_t j = 1; j < ring; ++j) {
+      const Index c = r[j];
+      const double d = cost(c);
+      if (d < cost_here && allowed(c)) {
+        cost_here = d;
+        next = c;
+      }
+    }
+    if (next == here) break;
+    here = next;
+  }
+  return here;
+}
+
+}  // namespace
+
 IndexList base_feet(const Points& base, const Points& base_normals, const Points& finest, const IndexList& rings,
                      int ring_size) {
   IndexList feet(static_cast<std::size_t>(base.rows()));
@@ -27,28 +54,28 @@ IndexList base_feet(const Points& base, const Points& base_normals, const Points
   parallel_for(feet.size(), [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {
       const Eigen::Index row = static_cast<Eigen::Index>(i);
-      const Eigen::RowVector3d q = finest.row(row);
-      const double reach2 = 0.0625 * (q - base.row(row)).squaredNorm();  // a quarter of the offset, squared
-      // Walk the rings downhill towards q: on a smooth base that finds the nearest base point
-      // within reach in a few steps, with no search of the whole base.
-      Index here = static_cast<Index>(i);
-      double best = (q - base.row(row)).squaredNorm();
-      for (int step = 0; step < 16; ++step) {
-        Index next = here;
-        const Index* r = rings.data() + static_cast<std::size_t>(here) * ring;
-        for (std::size_t j = 1; j < ring; ++j) {
-          const Index c = r[j];
-          const double d = (q - base.row(c)).squaredNorm();
-          if (d < best && (base.row(c) - base.row(row)).squaredNorm() <= reach2 &&
-              base_normals.row(c).dot(base_normals.row(row)) >= 0.5) {
-            best = d;
-            next = c;
-          }
-        }
-        if (next == here) break;
-        here = next;
-      }
-      feet[i] = here;
+      const Eigen::RowVector3d q = finest.row(row), n = base_normals.row(row);
+      const Eigen::RowVector3d offset = q - base.row(row);
+      // The foot is sought within a quarter of the offset of a centre that stays at the point's
+      // own base position unless q has drifted sideways from it by more than that (offset less
+      // its part along the normal). A tall feature's points drift on the way down through the
+      // levels, each its own way; searched for around their base positions, the feet of those
+      // that drifted far lie off to one side of the feature, which then leans with the lift's
+      // turn under them. Around the centre moved just far enough that the point right below q
+      // is within reach, the feet lie under the feature. Points that drifted less keep the
+      // search as it was.
+      const Eigen::RowVector3d drift = offset - offset.dot(n) * n;
+      const double reach2 = 0.0625 * offset.squaredNorm();  // a quarter of the offset, squared
+      const double drift_norm = drift.norm(), beyond = drift_norm - std::sqrt(reach2);
+      const Eigen::RowVector3d centre = beyond > 0.0 ? Eigen::RowVector3d(base.row(row) + (beyond / drift_norm) * drift)
+                                                     : Eigen::RowVector3d(base.row(row));
+      auto same_side = [&](Index c) { return base_normals.row(c).dot(n) >= 0.5; };
+      // First to the base point nearest the centre, then downhill towards q within reach of it.
+      const Index start = walk_rings(rings, ring, static_cast<Index>(i), (centre - base.row(row)).squaredNorm(),
+                                     [&](Index c) { return (centre - base.row(c)).squaredNorm(); }, same_side);
+      feet[i] = walk_rings(rings, ring, start, (q - base.row(start)).squaredNorm(),
+                           [&](Index c) { return (q - base.row(c)).squaredNorm(); },
+                           [&](Index c) { return (base.row(c) - centre).squaredNorm() <= reach2 && same_side(c); });
     }
   }, {}, 4096);
   return feet;
