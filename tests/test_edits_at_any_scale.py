@@ -92,18 +92,29 @@ def test_tall_handles_stand_on_the_lifted_base(handle_models, key):
 
 
 # Planes the requirement's figures were not tuned on: other sizes, handle counts, proportions
-# (3.3-3.8 times taller than wide, 5-6 widths apart) and sample spacings. Measured 2026-12-03 at
-# lifts half as high as wide: at most 1.40 degrees where the bound is 3, and 1.58 where it is 6.
+# (3.3-3.8 times taller than wide, 4-6 widths apart) and sample spacings. Measured 2026-12-05 at
+# lifts half as high as wide: at most 1.48 degrees where the bound is 3, and 1.56 where it is 6.
 OTHER_PLANES = {  # (size, count, width, height, sample spacing, decimation, kernel, levels)
     "wide plane, 5 x 5": (3.0, 5, 0.12, 0.45, 0.024, 0.2, 1.0, 6),
     "small plane, 3 x 3": (1.5, 3, 0.1, 0.38, 0.016, 0.2, 2.0, 5),
     "3 x 3, decimation 0.1": (2.0, 3, 0.12, 0.4, 0.02, 0.1, 1.0, 4),
+    "wide plane, 5 x 5, kernel 2": (3.0, 5, 0.15, 0.5, 0.025, 0.2, 2.0, 6),
 }
 
 
+# Lifts as high as wide (slopes up to 40 degrees) on the same planes. Measured 2026-12-05 at most
+# 2.07 degrees where the bound is 3 and 1.77 where it is 6, except on the small 3 x 3 plane: 3.23
+# where the bound is 3 (a known gap, below). On the wide plane with kernel 2, feet sought around
+# the points' own base positions (as before 2026-12-05) gave 3.60 and 4.72: the handles' tops had
+# drifted to one side on the way down through the levels, and their feet with them.
+KNOWN_GAP = pytest.mark.xfail(strict=True, reason="3.23 degrees measured where the bound is 3")
+CASES = [(name, 0.5) for name in OTHER_PLANES] + [
+    pytest.param(name, 1.0, marks=KNOWN_GAP) if name == "small plane, 3 x 3" else (name, 1.0) for name in OTHER_PLANES]
+
+
 @pytest.mark.filterwarnings("ignore:levels=.*a base this coarse")  # the flat base these need
-@pytest.mark.parametrize("name", list(OTHER_PLANES))
-def test_tall_handles_on_other_planes_stand_on_the_lifted_base(name):
+@pytest.mark.parametrize("name,steepness", CASES)
+def test_tall_handles_on_other_planes_stand_on_the_lifted_base(name, steepness):
     size, count, width, height, sample, decimation, kernel, levels = OTHER_PLANES[name]
     points, handle, centres = ps.shapes.handles_plane(size=size, count=count, width=width, height=height,
                                                       spacing=sample)
@@ -116,11 +127,11 @@ def test_tall_handles_on_other_planes_stand_on_the_lifted_base(name):
     for centre in (on, between):
         for factor in (0.75, 1.0, 1.5, 2.0):
             radius = factor * spacing
-            lift = 0.5 * radius
+            lift = steepness * radius
             result = ps.reconstruct(dec, base=gaussian_lift(dec.base, centre, radius, lift))
             angles = handle_axis_angles(result, points, handle, centres,
                                         lambda c: lift_normal(c, centre, radius, lift)[0])
-            assert angles.max() < (3.0 if factor >= 1.0 else 6.0), (name, centre, radius, angles.round(2))
+            assert angles.max() < (3.0 if factor >= 1.0 else 6.0), (name, centre, radius, lift, angles.round(2))
 
 def test_every_band_is_applied_along_the_lifted_surface_normal():
     """Requirement 2: a flat base with gentle detail, lifted; at every level the direction a
