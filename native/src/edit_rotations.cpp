@@ -70,9 +70,15 @@ IndexList base_feet(const Points& base, const Points& base_normals, const Points
       const Eigen::RowVector3d centre = beyond > 0.0 ? Eigen::RowVector3d(base.row(row) + (beyond / drift_norm) * drift)
                                                      : Eigen::RowVector3d(base.row(row));
       auto same_side = [&](Index c) { return base_normals.row(c).dot(n) >= 0.5; };
-      // First to the base point nearest the centre, then downhill towards q within reach of it.
-      const Index start = walk_rings(rings, ring, static_cast<Index>(i), (centre - base.row(row)).squaredNorm(),
-                                     [&](Index c) { return (centre - base.row(c)).squaredNorm(); }, same_side);
+      // A moved centre: first to the base point nearest it, if that is within reach (else the
+      // walk starts from the point's own base position, as before); then downhill towards q
+      // within reach of the centre.
+      Index start = static_cast<Index>(i);
+      if (beyond > 0.0) {
+        const Index nearest = walk_rings(rings, ring, start, beyond * beyond,
+                                         [&](Index c) { return (centre - base.row(c)).squaredNorm(); }, same_side);
+        if ((base.row(nearest) - centre).squaredNorm() <= reach2) start = nearest;
+      }
       feet[i] = walk_rings(rings, ring, start, (q - base.row(start)).squaredNorm(),
                            [&](Index c) { return (q - base.row(c)).squaredNorm(); },
                            [&](Index c) { return (base.row(c) - centre).squaredNorm() <= reach2 && same_side(c); });
