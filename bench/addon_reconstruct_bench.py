@@ -11,8 +11,8 @@ sliders set. Then, as a session goes:
 3. brushing: Level 0 lifted a little further before each Rebuild Detail (median of --repeat);
 4. Bake Filter on the edited base (median of --repeat);
 and the process's resident memory after all of it, against after the decompose.
---without-solver runs the same with the operators calling the stateless pointscale.reconstruct
-instead of the Reconstructor the add-on keeps per mesh, for comparison.
+--without-solver runs the same with the operators calling pointscale.reconstruct with nothing
+kept between calls instead of the Reconstructor the add-on keeps per mesh, for comparison.
 """
 
 from __future__ import annotations
@@ -35,13 +35,17 @@ def timed(call) -> float:
 
 
 class Stateless:
-    """What the operators would call without a kept solver: reconstruct() itself."""
+    """What the operators would call without a kept solver: reconstruct() itself, with nothing
+    kept between calls (the edit support it keeps with the decomposition dropped after each)."""
 
     def __init__(self, ps, dec):
         self.ps, self.dec = ps, dec
 
     def reconstruct(self, gains=None, base=None, **kwargs):
-        return self.ps.reconstruct(self.dec, gains, base, **kwargs)
+        try:
+            return self.ps.reconstruct(self.dec, gains, base, **kwargs)
+        finally:
+            self.dec._cache.pop("edit", None)
 
 
 def run(n: int, repeat: int, without_solver: bool) -> None:

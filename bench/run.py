@@ -26,13 +26,14 @@ For every input cloud and order the same float32-exact points are fed to every s
       OMP_NUM_THREADS = the same thread count,
   (c) ratio (a)/(faster of (b), (b')), per order            target < 1.0 (at 1M),
   (d) pointscale.reconstruct(dec, base=base), median of several runs, with base = dec.base
-      taken once before them, as an editor holds its edited base (through the edited-base
-      path; handed back unchanged, so no point turns), and the same through
+      taken once before them, as an editor holds its edited base (handed back unchanged, it
+      is recognised as the stored base, and no point turns), and the same through
       pointscale.Reconstructor(dec), the solver an editing session keeps (its one-off setup
       timed apart; the two are called alternately and must give identical points); then both
       again on a base a broad wave moved everywhere, so that every point's turn is measured.
-      reconstruct keeps nothing between calls, so each of its calls finds the edit support
-      again; the target is the Reconstructor's      target < 20 ms at 100k x 4 levels,
+      reconstruct's first call on an edited base finds the edit support and keeps it with
+      the decomposition (its time is printed apart); both have the same
+                                                      target < 20 ms at 100k x 4 levels,
   (e) peak memory per point while decomposing: peak RSS (VmHWM, reset after the data
       is loaded) minus the RSS after loading, in a fresh subprocess per cloud (not
       ru_maxrss: a child inherits its parent's peak through fork/exec)
@@ -297,6 +298,9 @@ def worker_pointscale(args: argparse.Namespace) -> int:
         # point's turn is measured: base=dec.base above turns nothing.
         lifted = base + (0.05 * diag) * np.sin(3.0 * base[:, [0]] / diag) * np.array([0.0, 0.0, 1.0])
         edited, solver_edited = [], []
+        t0 = time.perf_counter()
+        pointscale.reconstruct(dec, base=lifted)  # finds the edit support and keeps it with dec
+        moved_first = time.perf_counter() - t0
         for _ in range(args.recon_reps):
             t0 = time.perf_counter()
             pointscale.reconstruct(dec, base=lifted)
@@ -305,6 +309,7 @@ def worker_pointscale(args: argparse.Namespace) -> int:
             solver.reconstruct(base=lifted)
             solver_edited.append(time.perf_counter() - t0)
         res.update({
+            "reconstruct_moved_first_ms": moved_first * 1e3,
             "reconstruct_moved_median_ms": statistics.median(edited) * 1e3,
             "reconstructor_moved_median_ms": statistics.median(solver_edited) * 1e3,
         })
@@ -553,8 +558,8 @@ def verdicts(rows: list[dict]) -> list[str]:
         if (r["kind"] == "synthetic" and r["n"] == 100_000 and r["order"] == "shuffled"
                 and ps.get("reconstruct_median_ms") is not None):
             ms = ps["reconstruct_median_ms"]
-            lines.append(f"reconstruct at 100k x 4 levels (shuffled), pointscale.reconstruct (stateless: finds the "
-                         f"edit support on every call, even for its own base handed back): {ms:.1f} ms median")
+            lines.append(f"reconstruct at 100k x 4 levels (shuffled), pointscale.reconstruct on its own base handed "
+                         f"back: {ms:.1f} ms median")
             if ps.get("reconstructor_median_ms") is not None:
                 ms = ps["reconstructor_median_ms"]
                 same = ps.get("reconstructor_identical")
@@ -564,10 +569,12 @@ def verdicts(rows: list[dict]) -> list[str]:
                              f"{'MET' if same and ms < TARGET_RECON_MS else 'NOT MET'}")
             if ps.get("reconstruct_moved_median_ms") is not None:
                 a, b = ps["reconstruct_moved_median_ms"], ps["reconstructor_moved_median_ms"]
+                first = ps.get("reconstruct_moved_first_ms")
                 lines.append(f"reconstruct at 100k x 4 levels (shuffled) on a base moved everywhere: reconstruct "
-                             f"{a:.1f} ms (stateless), Reconstructor {b:.1f} ms median (the editing session's "
-                             f"solver; target < {TARGET_RECON_MS:.0f} ms) -> "
-                             f"{'MET' if b < TARGET_RECON_MS else 'NOT MET'}")
+                             f"{a:.1f} ms median after its first call ("
+                             + ("n/a" if first is None else f"{first:.1f}") + " ms, which finds the edit support), "
+                             f"Reconstructor {b:.1f} ms median (target < {TARGET_RECON_MS:.0f} ms) -> "
+                             f"{'MET' if max(a, b) < TARGET_RECON_MS else 'NOT MET'}")
     worst = [(r["ps"]["peak_bytes_per_point"], f"{r['name']}, {r['order_label']}") for r in rows if r.get("ps")]
     if worst:
         bpp, name = max(worst)
@@ -636,7 +643,8 @@ def results_markdown(rows: list[dict], meta: dict) -> str:
             "times on that row. CPU-time ratio: user + system CPU seconds, all threads, pointscale over that peer. "
             f"reconstruct: `reconstruct(dec, base=dec.base)` and `Reconstructor(dec).reconstruct(base=...)`, "
             f"medians of {m['recon_reps']} alternating calls in the first round's process; moved base: both on a "
-            "base a broad wave moved everywhere. Peak memory: peak RSS (VmHWM) minus the RSS after loading the "
+            "base a broad wave moved everywhere, after a first call of reconstruct that finds the edit support. "
+            "Peak memory: peak RSS (VmHWM) minus the RSS after loading the "
             "points, during the first round's decompose, per input point."
             + "".join(f" {what}." for what in m.get("not_run", [])),
             RESULTS_END]

@@ -134,18 +134,21 @@ def test_a_reconstructor_called_from_several_threads_gives_each_its_own_result()
 
 
 def test_reconstruct_from_several_threads_on_one_decomposition_gives_each_its_own_result():
-    # reconstruct() keeps nothing between calls, so calls on one decomposition share no storage.
+    # Calls on one decomposition share only what every edit needs (found by whichever call gets
+    # there first, then read only), never their working storage.
     from concurrent.futures import ThreadPoolExecutor
     points = ps.shapes.bumpy_sphere(20000)
     dec = ps.decompose(points, levels=4)
     base = dec.base * 1.1
-    gains = [np.array([1.0, g, 2.0 - g]) for g in np.linspace(0.0, 2.0, 8)]
-    # Without the kept arrays, straight from the model:
-    expected = [dec._reconstruct(g, base) for g in gains]
+    gains = [np.array([1.0, g, 2.0 - g]) for g in np.linspace(0.0, 2.0, 8)] + [np.ones(3)]
+    # With nothing kept, straight from the model:
+    expected = [dec._model.reconstruct(g, base=base, origin=dec.origin) for g in gains]
+    assert "edit" not in dec._cache  # the threads below find it
     with ThreadPoolExecutor(4) as pool:
         results = list(pool.map(lambda g: ps.reconstruct(dec, gains=g, base=base), gains * 3))
     for i, got in enumerate(results):
         assert np.array_equal(got, expected[i % len(gains)])
+    assert "edit" in dec._cache
 
 
 def _thread_ids() -> set:

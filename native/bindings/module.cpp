@@ -167,16 +167,25 @@ PYBIND11_MODULE(_core, m) {
       .def_static("from_arrays", &model_from_arrays)
       // origin: the decomposition's origin, or None. Given, `base` comes in world coordinates
       // and the points go out in them (one pass each way fewer than doing it in NumPy).
+      // memo: the decomposition's EditMemo, or None (reconstruction.h).
       .def("reconstruct", [](const MultiscaleModel& s, const DoubleArray& gains, py::object base, bool keep_levels,
-                             int upto, py::object progress, py::object origin, int threads) {
+                             int upto, py::object progress, py::object origin, int threads, py::object memo) {
         const Eigen::MatrixXd g = to_gains(gains);  // checked by the core (validation.h)
         Points edited;
-        const bool has_base = !base.is_none();
+        bool has_base = !base.is_none();
         const Vec3 o = to_origin(origin);
-        if (has_base) edited = to_points_centred(base.cast<DoubleArray>(), o);
+        if (has_base) {
+          const DoubleArray b = base.cast<DoubleArray>();
+          // The stored base handed back in world coordinates (base + origin, as the package
+          // gives it) is the stored base: centring it again would round it off it, and an
+          // edit of no size would cost a whole edited pass.
+          has_base = !(!origin.is_none() && is_stored_base(b, s.base, o));
+          if (has_base) edited = to_points_centred(b, o);
+        }
+        EditMemo* kept = memo.is_none() ? nullptr : &memo.cast<EditMemo&>();
         PythonProgress p(progress);
         Reconstruction r = without_gil(threads, [&] {
-          Reconstruction out = has_base ? reconstruct_from_base(s, g, std::move(edited), keep_levels, upto, p.get())
+          Reconstruction out = has_base ? reconstruct_from_base(s, g, std::move(edited), keep_levels, upto, p.get(), kept)
                                         : reconstruct(s, g, nullptr, keep_levels, upto, p.get());
           if (!origin.is_none()) {
             out.positions.rowwise() += o.transpose();
@@ -192,7 +201,11 @@ PYBIND11_MODULE(_core, m) {
         for (Points& level_normals : r.normals) normals.append(py::cast(std::move(level_normals)));
         return py::object(py::make_tuple(levels, normals));
       }, py::arg("gains"), py::arg("base") = py::none(), py::arg("keep_levels") = false, py::arg("upto") = -1,
-         py::arg("progress") = py::none(), py::arg("origin") = py::none(), py::arg("threads") = 0);
+         py::arg("progress") = py::none(), py::arg("origin") = py::none(), py::arg("threads") = 0,
+         py::arg("memo") = py::none());
+
+  // What a model's stateless reconstructions on an edited base share (reconstruction.h).
+  py::class_<EditMemo>(m, "EditMemo").def(py::init<>());
 
   // The solver for repeated reconstructions (reconstructor.h), which checks its arguments.
   py::class_<Reconstructor>(m, "Reconstructor")

@@ -142,14 +142,34 @@ double middle_eigenvalue(const Mat3& c, const Vec3& a) {
   return 0.5 * (sum - std::sqrt(disc));
 }
 
-// The unedited ring's plane: its normal, and whether it has a clear plane at all.
-RingKind ring_plane(const Ring& e0, int m, Vec3& normal) {
+// The unedited ring's plane: its normal, whether it has a clear plane at all, and for a clear
+// plane the two vectors planar_rotation weighs the edited ring by (RingPlane).
+RingKind ring_plane(const Ring& e0, int m, Vec3& normal, Vec3& w1, Vec3& w2) {
   const Mat3 c0 = ring_covariance(e0, m);
   const double t0 = c0.trace();
   normal = t0 > 0.0 ? smallest_eigenvector(c0, t0) : Vec3::Zero();
+  w1 = w2 = Vec3::Zero();
   if (normal.isZero()) return RingKind::on_a_line;
   // A plane is clear when the ring spreads across it far more than off it.
   if (normal.dot(c0 * normal) > 0.25 * middle_eigenvalue(c0, normal)) return RingKind::curved;
+  // The ring's coordinates u in its plane (axes t1, t2), about their mean, and their Gram
+  // matrix G. The least-squares map taking them to the edited ring has columns
+  // sum e1 u^T G^-1 = sum e1 (d . w), with d a point's edge less the mean and w1, w2 the
+  // columns of [t1 t2] G^-1: they depend on the unedited ring alone.
+  const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
+  Vec3 m0 = Vec3::Zero();
+  for (int j = 0; j < m; ++j) m0 += e0[j];
+  m0 /= m;
+  double g00 = 0.0, g01 = 0.0, g11 = 0.0;
+  for (int j = 0; j < m; ++j) {
+    const Vec3 d0 = e0[j] - m0;
+    const double u0 = d0.dot(t1), u1 = d0.dot(t2);
+    g00 += u0 * u0; g01 += u0 * u1; g11 += u1 * u1;
+  }
+  const double det = g00 * g11 - g01 * g01;
+  if (!(det > 1e-12 * (g00 + g11) * (g00 + g11))) return RingKind::on_a_line;  // collapsed to a line
+  w1 = (g11 * t1 - g01 * t2) / det;
+  w2 = (g00 * t2 - g01 * t1) / det;
   return RingKind::planar;
 }
 
@@ -158,31 +178,15 @@ RingKind ring_plane(const Ring& e0, int m, Vec3& normal) {
 // means), then the rotation nearest to it (2-D polar decomposition). A rigid turn of the ring
 // gives that turn exactly, since the unedited plane normal is uncorrelated with the ring's
 // spread across it; stretching the ring within its plane turns nothing.
-// a: the unedited plane's unit normal. Returns false where the ring folded over or collapsed.
-bool planar_rotation(const Ring& e0, const Ring& e1, int m, const Vec3& a, const Mat3& cluster, Mat3& rotation) {
-  const Vec3 t1 = a.unitOrthogonal(), t2 = a.cross(t1);
-  Vec3 m0 = Vec3::Zero();
-  for (int j = 0; j < m; ++j) m0 += e0[j];
-  m0 /= m;
-  // The ring's coordinates u in its plane sum to zero, so the edited ring's mean drops out of
-  // sum (e1 - mean1) u^T.
-  double g00 = 0.0, g01 = 0.0, g11 = 0.0;
-  Vec3 a0 = Vec3::Zero(), a1 = Vec3::Zero();
-  for (int j = 0; j < m; ++j) {
-    const Vec3 d0 = e0[j] - m0;
-    const double u0 = d0.dot(t1), u1 = d0.dot(t2);
-    g00 += u0 * u0; g01 += u0 * u1; g11 += u1 * u1;
-    a0 += u0 * e1[j]; a1 += u1 * e1[j];
-  }
-  const double det = g00 * g11 - g01 * g01;
-  if (!(det > 1e-12 * (g00 + g11) * (g00 + g11))) return false;
-  // The edited images of t1 and t2: columns of A G^-1.
-  const Vec3 c1 = (g11 * a0 - g01 * a1) / det, c2 = (g00 * a1 - g01 * a0) / det;
+// c1, c2: the edited images of the plane's axes t1, t2 (sum e1 (d . w), RingPlane); a: the
+// unedited plane's unit normal. Returns false where the ring folded over or collapsed.
+bool planar_rotation(const Vec3& c1, const Vec3& c2, const Vec3& a, const Mat3& cluster, Mat3& rotation) {
   Vec3 b = c1.cross(c2);
   const double bn = b.norm(), c1n = c1.norm();
   if (!(bn > 0.0) || !(c1n > 0.0)) return false;
   b /= bn;
   if (b.dot(cluster * a) < 0.0) return false;  // the ring turned over: no rotation describes it
+  const Vec3 t1 = a.unitOrthogonal(), t2 = a.cross(t1);
   const Vec3 f1 = c1 / c1n, f2 = b.cross(f1);
   double cs = c1n + c2.dot(f2), sn = -c2.dot(f1);
   const double r = std::sqrt(cs * cs + sn * sn);
@@ -194,23 +198,56 @@ bool planar_rotation(const Ring& e0, const Ring& e1, int m, const Vec3& a, const
   return true;
 }
 
+// A ring's edges e0 (unedited) and e1 (edited), relative to its first point, in one pass over
+// the ring: how far it changed shape (the largest coordinate of e1 - e0), and, for a clear
+// plane, the edited images c1, c2 of the plane's axes. The weights (e0 - mean e0) . w sum to
+// zero over the ring, so c = sum e1 (e0 . w) - (mean e0 . w) sum e1.
+double planar_images(const Points& original, const Points& edited, const Index* ring, int m, const Vec3& w1,
+                     const Vec3& w2, Vec3& c1, Vec3& c2) {
+  const double* o = original.data() + 3 * static_cast<std::size_t>(ring[0]);
+  const double* q = edited.data() + 3 * static_cast<std::size_t>(ring[0]);
+  double moved = 0.0;
+  Vec3 sum0 = Vec3::Zero(), sum1 = Vec3::Zero(), a1 = Vec3::Zero(), a2 = Vec3::Zero();
+  for (int j = 1; j < m; ++j) {  // the first edge is zero
+    const double* oj = original.data() + 3 * static_cast<std::size_t>(ring[j]);
+    const double* qj = edited.data() + 3 * static_cast<std::size_t>(ring[j]);
+    const Vec3 e0(oj[0] - o[0], oj[1] - o[1], oj[2] - o[2]);
+    const Vec3 e1(qj[0] - q[0], qj[1] - q[1], qj[2] - q[2]);
+    moved = std::max(moved, (e1 - e0).cwiseAbs().maxCoeff());
+    sum0 += e0;
+    sum1 += e1;
+    a1 += e0.dot(w1) * e1;
+    a2 += e0.dot(w2) * e1;
+  }
+  const Vec3 m0 = sum0 / m;
+  c1 = a1 - m0.dot(w1) * sum1;
+  c2 = a2 - m0.dot(w2) * sum1;
+  return moved;
+}
+
+// The rotation at ring i, and how it was measured (kind).
 Mat3 ring_rotation(const Points& original, const Points& edited, const Index* ring, int m, const Mat3& cluster,
-                   double tolerance, const Vec3* cached_normal, RingKind cached_kind, RingKind& kind) {
+                   double tolerance, const EditRingPlanes& planes, std::size_t i, RingKind& kind) {
+  kind = static_cast<RingKind>(planes.kind[i]);
+  if (kind == RingKind::planar) {
+    Vec3 c1, c2;
+    const double moved = planar_images(original, edited, ring, m, planes.in_plane[i][0], planes.in_plane[i][1], c1, c2);
+    // A ring that kept its shape to within rounding (a base handed back through another
+    // origin, or the far side of a local edit) has not turned: exactly the identity.
+    if (!(moved > tolerance)) { kind = RingKind::unchanged; return Mat3::Identity(); }
+    Mat3 rotation;
+    if (planar_rotation(c1, c2, planes.normals[i], cluster, rotation)) return rotation;
+    kind = RingKind::on_a_line;
+    return cluster;
+  }
   Ring e0, e1;
   ring_edges(original, ring, m, e0);
   ring_edges(edited, ring, m, e1);
-  // A ring that kept its shape to within rounding (a base handed back through another origin,
-  // or the far side of a local edit) has not turned: exactly the identity.
   double moved = 0.0;
   for (int j = 1; j < m; ++j) moved = std::max(moved, (e1[j] - e0[j]).cwiseAbs().maxCoeff());
   if (!(moved > tolerance)) { kind = RingKind::unchanged; return Mat3::Identity(); }
-  Vec3 a;
-  if (cached_normal) { a = *cached_normal; kind = cached_kind; } else { kind = ring_plane(e0, m, a); }
   if (kind == RingKind::curved) return best_rotation(e0, e1, m);
-  Mat3 rotation;
-  if (kind == RingKind::planar && planar_rotation(e0, e1, m, a, cluster, rotation)) return rotation;
-  kind = RingKind::on_a_line;
-  return cluster;
+  return cluster;  // on a line
 }
 
 }  // namespace
@@ -221,11 +258,13 @@ EditRingPlanes ring_planes(const Points& original, const IndexList& rings, int r
   EditRingPlanes planes;
   planes.normals.resize(n);
   planes.kind.resize(n);
+  planes.in_plane.resize(n);
   parallel_for(n, [&](std::size_t b, std::size_t e) {
     Ring e0;
     for (std::size_t i = b; i < e; ++i) {
       ring_edges(original, rings.data() + i * static_cast<std::size_t>(ring_size), ring_size, e0);
-      planes.kind[i] = static_cast<unsigned char>(ring_plane(e0, ring_size, planes.normals[i]));
+      planes.kind[i] = static_cast<unsigned char>(
+          ring_plane(e0, ring_size, planes.normals[i], planes.in_plane[i][0], planes.in_plane[i][1]));
     }
   }, {}, 1024);
   return planes;
@@ -248,14 +287,17 @@ void edit_rotations(const Points& original, const Points& edited, const IndexLis
   std::atomic<std::size_t> counts[4] = {{0}, {0}, {0}, {0}};
   // Rounding of the base's coordinates, well below any edit an artist makes.
   const double tolerance = n > 0 ? 1e-12 * (original.colwise().maxCoeff() - original.colwise().minCoeff()).norm() : 0.0;
+  EditRingPlanes found;
+  if (!planes) {
+    found = ring_planes(original, rings, ring_size);
+    planes = &found;
+  }
   parallel_for(n, [&](std::size_t b, std::size_t e) {
     std::size_t local[4] = {0, 0, 0, 0};
     for (std::size_t i = b; i < e; ++i) {
       RingKind kind;
       rotation[i] = ring_rotation(original, edited, rings.data() + i * static_cast<std::size_t>(ring_size), ring_size,
-                                  cluster_rotation[static_cast<std::size_t>(labels[i])], tolerance,
-                                  planes ? &planes->normals[i] : nullptr,
-                                  planes ? static_cast<RingKind>(planes->kind[i]) : RingKind::planar, kind);
+                                  cluster_rotation[static_cast<std::size_t>(labels[i])], tolerance, *planes, i, kind);
       ++local[static_cast<int>(kind)];
     }
     for (int t = 0; t < 4; ++t) counts[t] += local[t];

@@ -84,22 +84,26 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   const bool turned = edited && upto > 0;
   if (turned) {
     const std::vector<Mat3> clusters = transported_rotations(model.base, p, model.support[0]);
-    edit_rotations(model.base, p, ws.edit.rings, ws.edit.ring_size, clusters, model.support[0].labels,
-                   &ws.edit.planes, ws.rotation, &report);
+    edit_rotations(model.base, p, ws.edit->rings, ws.edit->ring_size, clusters, model.support[0].labels,
+                   &ws.edit->planes, ws.rotation, &report);
   }
   // Points whose detail stands on a foot other than their own base position: how far the edit
   // moves the foot, less how far it moves their own base position, less the turn of the span
   // between the two. Hanging the point from its foot rigidly would add exactly that.
   std::vector<HangFromFoot> hang;
-  if (turned) hang = hang_from_feet(model.base, p, ws.edit.feet, ws.rotation);
+  if (turned) hang = hang_from_feet(model.base, p, ws.edit->feet, ws.rotation);
   Points& fitted = turned ? ws.unedited : p;  // the level each level's normals are fitted to
   // Normals fitted once for these gains are reused (they do not depend on the edit): kept
   // between calls by a Reconstructor, or handed over by the unedited pass before this one.
   // An unedited pass asked for its normals (keep_normals) leaves them in the same place.
+  // At unit gains they may also come shared, found once for the model (KeptEdit).
   const bool cache = (turned && ws.kept) || (!edited && keep_normals);
-  const bool cached = turned && ws.unedited_normals.size() >= static_cast<std::size_t>(upto) &&
-                      ws.unedited_gains.rows() == gains.rows() && ws.unedited_gains.cols() == gains.cols() &&
-                      (ws.unedited_gains.array() == gains.array()).all();
+  const bool unit_gains = gains.cols() == 1 && (gains.array() == 1.0).all();
+  const std::vector<Points>* shared = turned && unit_gains && ws.unit_normals ? ws.unit_normals.get() : nullptr;
+  const bool cached = shared || (turned && ws.unedited_normals.size() >= static_cast<std::size_t>(upto) &&
+                                 ws.unedited_gains.rows() == gains.rows() && ws.unedited_gains.cols() == gains.cols() &&
+                                 (ws.unedited_gains.array() == gains.array()).all());
+  const std::vector<Points>& cached_normals = shared ? *shared : ws.unedited_normals;
   if (turned && !cached) ws.unedited = model.base;
   if (cache && !cached) {
     ws.unedited_gains.resize(0, 0);  // valid again only once every level is in
@@ -117,7 +121,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
     const ProgressStage stage = all.sub(double(l) / upto, double(l + 1) / upto);
     const Points* normals = previous;
     if (l > 0 && cached) {
-      normals = &ws.unedited_normals[static_cast<std::size_t>(l)];
+      normals = &cached_normals[static_cast<std::size_t>(l)];
     } else if (l > 0) {
       Points& into = cache ? ws.unedited_normals[static_cast<std::size_t>(l)]
                            : previous == &ws.normals[0] ? ws.normals[1] : ws.normals[0];
@@ -134,7 +138,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
         const double g = per_point ? gains(l, i) : gains(l, 0);
         const double offset = g * model.details(l, i);
         if (turned) {
-          const Mat3& turn = ws.rotation[static_cast<std::size_t>(ws.edit.feet[ii])];
+          const Mat3& turn = ws.rotation[static_cast<std::size_t>(ws.edit->feet[ii])];
           const Eigen::RowVector3d n = (turn * nrm.row(i).transpose()).transpose();
           p.row(i) += offset * n;
           if (!cached) ws.unedited.row(i) += offset * nrm.row(i);
@@ -163,32 +167,61 @@ EditSupport edit_support(const Points& base, const IndexList& parts, const Point
   return edit;
 }
 
+KeptEdit find_kept_edit(const MultiscaleModel& model, const ProgressStage& progress, bool with_unit_normals) {
+  // The feet need the unedited finest level. The pass that makes it fits the stored base's
+  // level normals at unit gains, which are the ones an edited pass fits at those gains.
+  ReconstructionWorkspace workspace;
+  const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
+  Points finest = model.base;
+  reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, progress.sub(0.0, 0.5), workspace,
+                              with_unit_normals);
+  KeptEdit kept;
+  kept.support = std::make_shared<const EditSupport>(edit_support(model.base, model.parts, model.base_normals, finest));
+  if (with_unit_normals)
+    kept.unit_normals = std::make_shared<const std::vector<Points>>(std::move(workspace.unedited_normals));
+  progress.report(1.0);
+  return kept;
+}
+
+std::shared_ptr<const KeptEdit> EditMemo::get() const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return kept_;
+}
+
+void EditMemo::keep(std::shared_ptr<const KeptEdit> found) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (!kept_) kept_ = std::move(found);
+}
+
 namespace {
 
 Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points p, bool edited,
-                                  bool keep_levels, int upto, const ProgressCallback* progress) {
+                                  bool keep_levels, int upto, const ProgressCallback* progress, EditMemo* memo) {
   const ProgressStage all{progress, 0.0, 1.0};
   // A base handed back unchanged turns no detail: the unedited path gives the same points bit
   // for bit, without finding the edit support.
   if (edited && p.rows() == model.base.rows() && p == model.base) edited = false;
   ReconstructionWorkspace workspace;
   // An edit turns detail only where there is detail to turn. Finding what it needs costs about
-  // two passes over the levels (the unedited one and the edit support): two thirds of the progress.
+  // two passes over the levels (the unedited one and the edit support): two thirds of the
+  // progress, where a memo does not have it yet.
   const bool turns = edited && upto != 0 && model.bands() > 0;
+  bool found_here = false;
   if (turns) {
-    // The feet need the unedited finest level. The pass that makes it fits the stored base's
-    // level normals at unit gains, which are the ones the edited pass fits at those gains: it
-    // keeps them for that pass then (at other gains they are of no use, and cost memory).
-    const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
-    Points finest = model.base;
-    const bool unit_gains = gains.cols() == 1 && (gains.array() == 1.0).all();
-    reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, all.sub(0.0, 1.0 / 3.0), workspace,
-                                unit_gains);
-    workspace.edit = edit_support(model.base, model.parts, model.base_normals, finest);
-    all.report(2.0 / 3.0);
+    std::shared_ptr<const KeptEdit> kept = memo ? memo->get() : nullptr;
+    if (!kept) {
+      // Without a memo, the normals at unit gains are of use to this call only at those gains
+      // (at others they cost memory).
+      const bool unit_gains = gains.cols() == 1 && (gains.array() == 1.0).all();
+      kept = std::make_shared<const KeptEdit>(find_kept_edit(model, all.sub(0.0, 2.0 / 3.0), memo || unit_gains));
+      if (memo) memo->keep(kept);
+      found_here = true;
+    }
+    workspace.edit = kept->support;
+    workspace.unit_normals = kept->unit_normals;
   }
   Reconstruction out;
-  const ProgressStage rest = all.sub(turns ? 2.0 / 3.0 : 0.0, 1.0);
+  const ProgressStage rest = all.sub(found_here ? 2.0 / 3.0 : 0.0, 1.0);
   out.edit = reconstruct_levels_in_place(model, gains, p, edited, keep_levels ? &out : nullptr, upto, rest,
                                          workspace);
   out.positions = std::move(p);
@@ -198,17 +231,17 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
 }  // namespace
 
 Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
-                           bool keep_levels, int upto, const ProgressCallback* progress) {
-  if (base) return reconstruct_from_base(model, gains, *base, keep_levels, upto, progress);
+                           bool keep_levels, int upto, const ProgressCallback* progress, EditMemo* memo) {
+  if (base) return reconstruct_from_base(model, gains, *base, keep_levels, upto, progress, memo);
   check_gains(gains, model.bands(), model.base.rows());
-  return reconstruct_levels(model, gains, model.base, false, keep_levels, upto, progress);
+  return reconstruct_levels(model, gains, model.base, false, keep_levels, upto, progress, nullptr);
 }
 
 Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points base,
-                                     bool keep_levels, int upto, const ProgressCallback* progress) {
+                                     bool keep_levels, int upto, const ProgressCallback* progress, EditMemo* memo) {
   check_gains(gains, model.bands(), model.base.rows());
   check_base(base, model.base.rows(), Vec3::Zero());
-  return reconstruct_levels(model, gains, std::move(base), true, keep_levels, upto, progress);
+  return reconstruct_levels(model, gains, std::move(base), true, keep_levels, upto, progress, memo);
 }
 
 }  // namespace pointscale

@@ -1,5 +1,6 @@
 #include "pointscale/reconstructor.h"
 
+#include <atomic>
 #include <numeric>
 
 #include "pointscale/parallel.h"
@@ -118,6 +119,7 @@ void Reconstructor::State::find_edit_support(const ProgressStage& progress) {
   to.feet.resize(from.feet.size());
   to.planes.normals.resize(from.planes.normals.size());
   to.planes.kind.resize(from.planes.kind.size());
+  to.planes.in_plane.resize(from.planes.in_plane.size());
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
     for (std::size_t r = b; r < e; ++r) {
       const std::size_t i = static_cast<std::size_t>(order[r]);
@@ -125,9 +127,10 @@ void Reconstructor::State::find_edit_support(const ProgressStage& progress) {
       to.feet[r] = rank[from.feet[i]];
       to.planes.normals[r] = from.planes.normals[i];
       to.planes.kind[r] = from.planes.kind[i];
+      to.planes.in_plane[r] = from.planes.in_plane[i];
     }
   }, {}, 4096);
-  workspace.edit = std::move(to);
+  workspace.edit = std::make_shared<const EditSupport>(std::move(to));
   progress.report(1.0);
 }
 
@@ -141,13 +144,22 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
   bool edited = base != nullptr;
   if (edited) {
     s.level.resize(n, 3);
+    std::atomic<bool> moved{false};
     parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+      bool here = false;
       for (std::size_t r = b; r < e; ++r)
-        for (int a = 0; a < 3; ++a)
-          s.level(static_cast<Eigen::Index>(r), a) = base[3 * std::size_t(s.order[r]) + a] - origin(a);
+        for (int a = 0; a < 3; ++a) {
+          const double world = base[3 * std::size_t(s.order[r]) + a];
+          const double stored = s.model.base(static_cast<Eigen::Index>(r), a);
+          s.level(static_cast<Eigen::Index>(r), a) = world - origin(a);
+          here = here || !(world == stored + origin(a));
+        }
+      if (here) moved = true;
     }, {}, 4096);
-    // A base handed back unchanged turns no detail (as in reconstruct()).
-    edited = s.level != s.model.base;
+    // A base handed back unchanged turns no detail (as in reconstruct()): in the caller's
+    // coordinates, where centring it again would round it off the stored one.
+    edited = moved && s.level != s.model.base;
+    if (!edited) s.level = s.model.base;
   } else {
     s.level = s.model.base;
   }
@@ -155,7 +167,7 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
   // takes the first two thirds of the progress.
   const ProgressStage all{progress, 0.0, 1.0};
   ProgressStage levels = all;
-  if (edited && s.model.bands() > 0 && s.workspace.edit.feet.size() != static_cast<std::size_t>(n)) {
+  if (edited && s.model.bands() > 0 && !s.workspace.edit) {
     s.find_edit_support(all.sub(0.0, 2.0 / 3.0));
     levels = all.sub(2.0 / 3.0, 1.0);
   }

@@ -136,7 +136,7 @@ def test_bake_filter_says_how_many_points_fold_and_prevent_folds_removes_them():
 
 def test_rebuild_and_bake_share_one_kept_reconstructor():
     """Rebuild Detail and Bake Filter run on the mesh's pointscale.Reconstructor, kept between
-    calls (reconstruct() keeps nothing), and give what reconstruct() gives."""
+    calls, and give what reconstruct() gives."""
     import pointscale as ps
 
     writeback = importlib.import_module(h.ADDON_NAME + ".writeback")

@@ -5,6 +5,7 @@
 // away. The turn at a point is measured on its ring instead: the point and its nearest base
 // points, found once on the unedited base, as a mesh's one-ring is.
 #pragma once
+#include <array>
 #include <vector>
 
 #include "pointscale/types.h"
@@ -54,9 +55,12 @@ struct EditRotationReport {
 
 // The planes of the unedited rings, which no edit changes: what edit_rotations would find
 // again on every call. kind: 1 a clear plane, 2 no clear plane, 3 on a line (RingKind).
+// in_plane: for a clear plane, w1 and w2 with sum_j e1_j ((e0_j - mean e0) . w) the edited
+// image of the plane's axes (least squares over the ring); zero otherwise.
 struct EditRingPlanes {
   std::vector<Vec3> normals;  // #P
   std::vector<unsigned char> kind;  // #P
+  std::vector<std::array<Vec3, 2>> in_plane;  // #P
 };
 // ring_size at most edit_ring_size (std::invalid_argument otherwise), as for edit_rotations.
 EditRingPlanes ring_planes(const Points& original, const IndexList& rings, int ring_size);

@@ -4,6 +4,8 @@
 // edit turns the base around that point (edit_rotations.h), so the detail follows an edit of
 // any scale upright.
 #pragma once
+#include <memory>
+#include <mutex>
 #include <vector>
 
 #include "pointscale/decomposition.h"
@@ -18,19 +20,41 @@ struct Reconstruction {
   EditRotationReport edit;      // how the edit's turns were measured (all zero when unedited)
 };
 
+struct KeptEdit;  // detail/reconstruct_levels.h
+
+// What one model's stateless reconstructions on an edited base share: the first such call
+// given it finds what every edit needs (each base point's ring, plane and foot, and the stored
+// base's level normals at unit gains) and leaves it here; the calls after it read it, so they
+// cost the edited pass alone. Nothing in it depends on an edit or on gains, and once found it
+// is read only: calls on any thread may share one. It holds about 250 bytes a point (4
+// levels). A memo belongs to one model: handing it to another is an error no check can catch.
+class EditMemo {
+ public:
+  std::shared_ptr<const KeptEdit> get() const;
+  void keep(std::shared_ptr<const KeptEdit> found);
+
+ private:
+  mutable std::mutex mutex_;
+  std::shared_ptr<const KeptEdit> kept_;
+};
+
 // gains     k by 1 (per band) or k by #P (per point); band l is scaled by its gain
 // base      #P by 3 edited P^0, or nullptr for the stored one (whose normals are then read from
 //           the model, bit for bit what fitting them again gives)
 // upto      reconstruct levels 0..upto only (upto <= k)
-// Stateless: every call finds what an edited base needs afresh (the rings, planes and feet of
-// edit_rotations.h) and allocates its own arrays. A caller that reconstructs one model over
-// and over keeps a Reconstructor (reconstructor.h), the one cache of those.
+// memo      the model's EditMemo, or nullptr: every call on an edited base then finds what the
+//           edit needs afresh (the rings, planes and feet of edit_rotations.h)
+// Each call allocates its own working arrays. A caller that reconstructs one model over and
+// over keeps a Reconstructor (reconstructor.h), which also keeps those and lays the model out
+// in a spatial order. Results are bit for bit the same with a memo or without.
 Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points* base,
-                           bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr);
+                           bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr,
+                           EditMemo* memo = nullptr);
 
 // The same from an edited base that the caller hands over (no copy of it is made).
 Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points base,
-                                     bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr);
+                                     bool keep_levels, int upto = -1, const ProgressCallback* progress = nullptr,
+                                     EditMemo* memo = nullptr);
 
 // The level loop behind both, shared with Reconstructor: detail/reconstruct_levels.h.
 

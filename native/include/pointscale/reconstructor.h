@@ -1,6 +1,6 @@
 // Reconstruction from one model over and over, as an editing session runs it (Sec. 8.1): a
-// solver beside the stateless free functions of reconstruction.h, and the one place where
-// anything is kept between reconstructions. It holds the model in a spatially coherent point
+// solver beside the free functions of reconstruction.h (which keep only an EditMemo between
+// calls). It holds the model in a spatially coherent point
 // order (level 0's clusters one after another), each level's grouping by cluster, the working
 // storage, and, from its first edited call on, what an edited base needs (the rings, planes
 // and feet of edit_rotations.h) and the stored base's level normals for the gains last used.

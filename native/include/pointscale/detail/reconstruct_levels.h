@@ -1,6 +1,7 @@
 // The level loop of reconstruction (reconstruction.h), which reconstruct() and Reconstructor
 // share, and what an edited base needs beyond the model.
 #pragma once
+#include <memory>
 #include <vector>
 
 #include "pointscale/reconstruction.h"
@@ -22,13 +23,26 @@ struct EditSupport {
 //                             level; parts: the model's part labels, or empty
 EditSupport edit_support(const Points& base, const IndexList& parts, const Points& base_normals, const Points& finest);
 
+// What every reconstruction of one model on an edited base shares, and no edit or gain
+// changes: the edit support, and the stored base's level normals at unit gains (levels
+// 1..k-1; level 0's are the model's), which an edited pass at those gains reads instead of
+// fitting them. Read only once found, so calls on any thread can share it (EditMemo).
+struct KeptEdit {
+  std::shared_ptr<const EditSupport> support;
+  std::shared_ptr<const std::vector<Points>> unit_normals;  // or null: fitted by each call
+};
+
+// Finds it: a pass over the stored base's levels at unit gains (for the feet, and the
+// normals when with_unit_normals), then the support. Progress as two passes over the levels.
+KeptEdit find_kept_edit(const MultiscaleModel& model, const ProgressStage& progress, bool with_unit_normals);
+
 // The working storage of the level loop. reconstruct() makes a fresh one per call; a
 // Reconstructor keeps one between calls.
 struct ReconstructionWorkspace {
   std::vector<LabelGroups> groups;  // per level: its points grouped like support.local, or empty
   Points normals[2];                // two levels' normals, alternating
   Points centroids;                 // a level's anchors
-  EditSupport edit;                 // found on the first edited call
+  std::shared_ptr<const EditSupport> edit;  // found on the first edited call, or shared (KeptEdit)
   std::vector<Mat3> rotation;       // an edited base: each point's turn
   Points unedited;                  // an edited base: the level as the stored base gives it
   // An edited base: the stored base's level normals for the gains last used, 1..levels - 1
@@ -36,6 +50,8 @@ struct ReconstructionWorkspace {
   // keeps its gains fits them once.
   Eigen::MatrixXd unedited_gains;
   std::vector<Points> unedited_normals;
+  // Or, at unit gains, those normals found once for the model and shared (KeptEdit): read only.
+  std::shared_ptr<const std::vector<Points>> unit_normals;
   bool kept = false;  // kept between calls: the unedited normals are worth keeping
 };
 
