@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "pointscale/detail/fast_exp.h"
+#include "pointscale/detail/moment_lanes.h"
 #include "pointscale/detail/simd_clones.h"
 
 namespace pointscale {
@@ -100,17 +101,23 @@ PlaneFit fit_nearest_plane(CandidateSet& c, int k, const Vec3& foot, double& nea
     const double masked = r2[j] <= limit ? e[j] : std::numeric_limits<double>::infinity();
     min_e = masked < min_e ? masked : min_e;
   }
-  double sw = 0, sx = 0, sy = 0, sz = 0, sxx = 0, syy = 0, szz = 0, sxy = 0, sxz = 0, syz = 0;
-#pragma omp simd reduction(+ : sw, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz)
-  for (int j = 0; j < m; ++j) {
+  // Candidates in fixed lanes (moment_lanes.h): the same sums on every CPU.
+  MomentLanes s;
+  const auto add = [&](int j, int l) POINTSCALE_ALWAYS_INLINE_LAMBDA {
     const double w = r2[j] <= limit ? exp_nonpositive(min_e - e[j]) : 0.0;
     const double dx = px[j] - fx, dy = py[j] - fy, dz = pz[j] - fz;
     const double wx = w * dx, wy = w * dy, wz = w * dz;
-    sw += w; sx += wx; sy += wy; sz += wz;
-    sxx += wx * dx; syy += wy * dy; szz += wz * dz;
-    sxy += wx * dy; sxz += wx * dz; syz += wy * dz;
+    s.add(l, w, wx, wy, wz, wx * dx, wy * dy, wz * dz, wx * dy, wx * dz, wy * dz);
+  };
+  int j = 0;
+  for (; j + moment_lanes <= m; j += moment_lanes) {
+#pragma omp simd
+    for (int l = 0; l < moment_lanes; ++l) add(j + l, l);
   }
-  return plane_from_sums(sw, Vec3(sx, sy, sz), sxx, syy, szz, sxy, sxz, syz, foot);
+  for (int l = 0; j + l < m; ++l) add(j + l, l);
+  return plane_from_sums(lanes_total(s.w), Vec3(lanes_total(s.x), lanes_total(s.y), lanes_total(s.z)),
+                         lanes_total(s.xx), lanes_total(s.yy), lanes_total(s.zz), lanes_total(s.xy),
+                         lanes_total(s.xz), lanes_total(s.yz), foot);
 }
 
 }  // namespace pointscale

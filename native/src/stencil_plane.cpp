@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "pointscale/detail/fast_exp.h"
+#include "pointscale/detail/moment_lanes.h"
 #include "pointscale/detail/plane_fit.h"
 #include "pointscale/detail/portable.h"
 #include "pointscale/detail/simd_clones.h"
@@ -97,16 +98,23 @@ POINTSCALE_ALWAYS_INLINE void covariances_of_group(PlaneStencil& stencil, const 
       e[j] = e0[j] + ih2[j] * q2 + gx[j] * qx + gy[j] * qy + gz[j] * qz;
       min_e = e[j] < min_e ? e[j] : min_e;
     }
-    double sw = 0, sx = 0, sy = 0, sz = 0, sxx = 0, syy = 0, szz = 0, sxy = 0, sxz = 0, syz = 0;
-#pragma omp simd reduction(+ : sw, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz)
-    for (int j = 0; j < k; ++j) {
+    // Neighbours in fixed lanes (moment_lanes.h): the same sums on every CPU.
+    MomentLanes s;
+    const auto add = [&](int j, int l) POINTSCALE_ALWAYS_INLINE_LAMBDA {
       double w = exp_nonpositive(min_e - e[j]);
       w = w > weight_floor ? w : weight_floor;
-      sw += w; sx += w * px[j]; sy += w * py[j]; sz += w * pz[j];
-      sxx += w * pxx[j]; syy += w * pyy[j]; szz += w * pzz[j];
-      sxy += w * pxy[j]; sxz += w * pxz[j]; syz += w * pyz[j];
+      s.add(l, w, w * px[j], w * py[j], w * pz[j], w * pxx[j], w * pyy[j], w * pzz[j], w * pxy[j], w * pxz[j],
+            w * pyz[j]);
+    };
+    int j = 0;
+    for (; j + moment_lanes <= k; j += moment_lanes) {
+#pragma omp simd
+      for (int l = 0; l < moment_lanes; ++l) add(j + l, l);
     }
-    covariance_from_sums(sw, sx, sy, sz, sxx, syy, szz, sxy, sxz, syz, cov + 6 * first, trace[first], valid[first]);
+    for (int l = 0; j + l < k; ++l) add(j + l, l);
+    covariance_from_sums(lanes_total(s.w), lanes_total(s.x), lanes_total(s.y), lanes_total(s.z), lanes_total(s.xx),
+                         lanes_total(s.yy), lanes_total(s.zz), lanes_total(s.xy), lanes_total(s.xz),
+                         lanes_total(s.yz), cov + 6 * first, trace[first], valid[first]);
     return;
   }
   alignas(64) double qx[L], qy[L], qz[L], q2[L], min_e[L];

@@ -16,6 +16,14 @@
 #define POINTSCALE_ALWAYS_INLINE inline
 #endif
 
+// The same for a lambda, written after its parameter list (MSVC has no spelling for it before
+// C++20, and inlines small lambdas anyway).
+#if defined(__GNUC__) || defined(__clang__)
+#define POINTSCALE_ALWAYS_INLINE_LAMBDA __attribute__((always_inline))
+#else
+#define POINTSCALE_ALWAYS_INLINE_LAMBDA
+#endif
+
 // GCC >= 11, Clang and MSVC >= 19.27 (which has no __has_builtin) have __builtin_bit_cast.
 #if defined(__has_builtin)
 #if __has_builtin(__builtin_bit_cast)
