@@ -94,6 +94,18 @@ def test_reconstruct_keeps_what_every_edit_needs_and_gives_the_same_points(case)
     assert "edit" in fresh._cache  # kept: the calls above after the first read it
 
 
+def test_a_memo_found_for_a_model_of_another_size_is_refused():
+    # The package keeps one memo per decomposition; the core's own callers could mix them up,
+    # and a memo read for more or fewer points than it holds would read out of its bounds.
+    small = ps.decompose(ps.shapes.bumpy_sphere(3000, seed=1), levels=3)
+    large = ps.decompose(ps.shapes.bumpy_sphere(4000, seed=2), levels=3)
+    memo = ps.multiscale._core.EditMemo()
+    ones = np.ones(small.n_bands)
+    small._model.reconstruct(ones, base=small.base * 1.01, origin=small.origin, memo=memo)
+    with pytest.raises(ValueError, match="EditMemo was found for a model of 3000 points"):
+        large._model.reconstruct(ones, base=large.base * 1.01, origin=large.origin, memo=memo)
+
+
 @pytest.mark.parametrize("stop_below", [0.0, 0.6])
 def test_reconstruct_cancelled_on_its_first_edited_call_keeps_nothing_half_found(case, stop_below):
     # Cancelled inside the unedited pass, or just as the support is complete (2/3), the call

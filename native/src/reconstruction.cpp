@@ -1,6 +1,8 @@
 #include "pointscale/reconstruction.h"
 #include "pointscale/validation.h"
 
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include <Eigen/Geometry>
@@ -209,6 +211,12 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
   bool found_here = false;
   if (turns) {
     std::shared_ptr<const KeptEdit> kept = memo ? memo->get() : nullptr;
+    // A memo found for another model would be read out of its bounds (a model of the same
+    // size cannot be told apart: reconstruction.h).
+    if (kept && kept->support->feet.size() != static_cast<std::size_t>(model.base.rows()))
+      throw std::invalid_argument("this EditMemo was found for a model of " +
+                                  std::to_string(kept->support->feet.size()) + " points, not this one's " +
+                                  std::to_string(model.base.rows()));
     if (!kept) {
       // Without a memo, the normals at unit gains are of use to this call only at those gains
       // (at others they cost memory).

@@ -27,7 +27,8 @@ struct KeptEdit;  // detail/reconstruct_levels.h
 // base's level normals at unit gains) and leaves it here; the calls after it read it, so they
 // cost the edited pass alone. Nothing in it depends on an edit or on gains, and once found it
 // is read only: calls on any thread may share one. It holds about 250 bytes a point (4
-// levels). A memo belongs to one model: handing it to another is an error no check can catch.
+// levels). A memo belongs to one model: handed to a model of another size it is an error
+// (std::invalid_argument); one of the same size cannot be told apart.
 class EditMemo {
  public:
   std::shared_ptr<const KeptEdit> get() const;

@@ -113,10 +113,11 @@ class Decomposition:
                                        origin=self.origin, threads=threads, memo=memo)
 
     def _kept(self, key: str, make):
-        """What make() returns, made once and kept with this decomposition (fold references...)."""
-        if key not in self._cache:
-            self._cache[key] = make()
-        return self._cache[key]
+        """What make() returns, made once and kept with this decomposition (fold references...).
+        Threads that ask at once may each make one, but all get the first kept (setdefault is
+        atomic), so none keeps a value another thread has dropped."""
+        value = self._cache.get(key)
+        return value if value is not None else self._cache.setdefault(key, make())
 
     def _mirror_about(self, symmetry) -> None:
         """Makes this decomposition of the whole model one of its mirrored half (pointscale.mirror)."""
