@@ -12,7 +12,8 @@ from . import group_weights, keys, logic, mesh_io, preferences, recipe, storage
 _cache: dict = {}
 # A Reconstructor per decomposition that Rebuild Detail or Bake Filter used last, under the same
 # keys: the solver finds what an edited base needs once, as reconstruct() does, and also keeps
-# the model in a spatial order with each level's grouping and its working arrays. It copies the model, so only the last two.
+# the model in a spatial order with each level's grouping and its working arrays. It copies
+# the model, so only the last two.
 _solvers: dict = {}
 _SOLVERS_KEPT = 2
 

@@ -47,17 +47,6 @@ inline Points to_points_centred(const DoubleArray& a, const Vec3& origin) {
   return p;
 }
 
-// Whether a (n, 3) array is stored + origin exactly, as the package hands the stored base out
-// (an IEEE sum is the same in NumPy and here). Stops at the first row that differs.
-inline bool is_stored_base(const DoubleArray& a, const Points& stored, const Vec3& origin) {
-  if (a.ndim() != 2 || a.shape(1) != 3 || a.shape(0) != stored.rows()) return false;
-  const double* v = a.data();
-  for (Eigen::Index i = 0; i < stored.rows(); ++i, v += 3)
-    for (int c = 0; c < 3; ++c)
-      if (!(v[c] == stored(i, c) + origin(c))) return false;
-  return true;
-}
-
 // An optional (n, 3) array: None gives no points and get() nullptr, as the core takes it.
 struct OptionalPoints {
   Points p;

@@ -12,6 +12,7 @@
 #include "pointscale/cluster_decimation.h"
 #include "pointscale/connected_parts.h"
 #include "pointscale/decomposition.h"
+#include "pointscale/detail/stored_base.h"
 #include "pointscale/folds.h"
 #include "pointscale/mls_projection.h"
 #include "pointscale/single_pass.h"
@@ -179,7 +180,8 @@ PYBIND11_MODULE(_core, m) {
           // The stored base handed back in world coordinates (base + origin, as the package
           // gives it) is the stored base: centring it again would round it off it, and an
           // edit of no size would cost a whole edited pass.
-          has_base = !(!origin.is_none() && is_stored_base(b, s.base, o));
+          has_base = origin.is_none() || b.ndim() != 2 || b.shape(0) != s.base.rows() || b.shape(1) != 3 ||
+                     !is_stored_base(b.data(), s.base, o);
           if (has_base) edited = to_points_centred(b, o);
         }
         EditMemo* kept = memo.is_none() ? nullptr : &memo.cast<EditMemo&>();

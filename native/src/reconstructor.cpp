@@ -1,8 +1,8 @@
 #include "pointscale/reconstructor.h"
 
-#include <atomic>
 #include <numeric>
 
+#include "pointscale/detail/stored_base.h"
 #include "pointscale/parallel.h"
 #include "pointscale/spatial_order.h"
 #include "pointscale/detail/cluster_layout.h"
@@ -141,28 +141,19 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
   const std::lock_guard<std::mutex> lock(busy_);
   State& s = *state_;
   const Eigen::Index n = points();
-  bool edited = base != nullptr;
+  // A base handed back unchanged turns no detail (as in reconstruct()), and is recognised in
+  // the caller's coordinates (detail/stored_base.h).
+  bool edited = base != nullptr && !is_stored_base(base, s.model.base, origin, s.order.data());
   if (edited) {
     s.level.resize(n, 3);
-    std::atomic<bool> moved{false};
     parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-      bool here = false;
       for (std::size_t r = b; r < e; ++r)
-        for (int a = 0; a < 3; ++a) {
-          const double world = base[3 * std::size_t(s.order[r]) + a];
-          const double stored = s.model.base(static_cast<Eigen::Index>(r), a);
-          s.level(static_cast<Eigen::Index>(r), a) = world - origin(a);
-          here = here || !(world == stored + origin(a));
-        }
-      if (here) moved = true;
+        for (int a = 0; a < 3; ++a)
+          s.level(static_cast<Eigen::Index>(r), a) = base[3 * std::size_t(s.order[r]) + a] - origin(a);
     }, {}, 4096);
-    // A base handed back unchanged turns no detail (as in reconstruct()): in the caller's
-    // coordinates, where centring it again would round it off the stored one.
-    edited = moved && s.level != s.model.base;
-    if (!edited) s.level = s.model.base;
-  } else {
-    s.level = s.model.base;
+    edited = s.level != s.model.base;  // centred onto it by rounding
   }
+  if (!edited) s.level = s.model.base;
   // The first edited call finds the edit support too, which costs about twice the levels: it
   // takes the first two thirds of the progress.
   const ProgressStage all{progress, 0.0, 1.0};
