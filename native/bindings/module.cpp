@@ -12,7 +12,6 @@
 #include "pointscale/cluster_decimation.h"
 #include "pointscale/connected_parts.h"
 #include "pointscale/decomposition.h"
-#include "pointscale/detail/stored_base.h"
 #include "pointscale/folds.h"
 #include "pointscale/mls_projection.h"
 #include "pointscale/single_pass.h"
@@ -22,6 +21,7 @@
 #include "pointscale/reconstructor.h"
 #include "pointscale/sample_spacing.h"
 #include "pointscale/spatial_order.h"
+#include "pointscale/stored_base.h"
 #include "pointscale/validation.h"
 #include "bindings.h"
 

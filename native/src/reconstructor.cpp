@@ -2,7 +2,7 @@
 
 #include <numeric>
 
-#include "pointscale/detail/stored_base.h"
+#include "pointscale/stored_base.h"
 #include "pointscale/parallel.h"
 #include "pointscale/spatial_order.h"
 #include "pointscale/detail/cluster_layout.h"
@@ -142,7 +142,7 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
   State& s = *state_;
   const Eigen::Index n = points();
   // A base handed back unchanged turns no detail (as in reconstruct()), and is recognised in
-  // the caller's coordinates (detail/stored_base.h).
+  // the caller's coordinates (stored_base.h).
   bool edited = base != nullptr && !is_stored_base(base, s.model.base, origin, s.order.data());
   if (edited) {
     s.level.resize(n, 3);
