@@ -39,6 +39,19 @@ def handle_axis_angles(result, points, handle, centres, normal_at):
     return np.array(out)
 
 
+def handle_principal_axis_angles(result, handle, centres, normal_at):
+    """Degrees between each handle's principal axis (the covariance's largest eigenvector over
+    all its points, the issue's own measure) and normal_at(centre). A handle the lift stretched
+    sideways is less elongated, so a lean of its points shows more here than in
+    handle_axis_angles."""
+    out = []
+    for h, centre in enumerate(centres):
+        q = result[handle == h] - result[handle == h].mean(axis=0)
+        axis = np.linalg.eigh(q.T @ q)[1][:, 2]
+        out.append(np.degrees(np.arccos(min(1.0, abs(axis @ normal_at(centre))))))
+    return np.array(out)
+
+
 # Tall handles on a plane 2 units wide, 0.5 apart: (width, height, sample spacing, decimation,
 # levels), with enough levels for a flat base under them. "tall" is 4 times taller than wide
 # and stands 5 widths apart; "slender" is 3.1 times taller and 6.25 widths apart.
@@ -73,11 +86,18 @@ def lifts(centres, spacing):
 @pytest.mark.parametrize("key", [(name, decimation, kernel) for name, decimation in SHAPES for kernel in (1.0, 2.0)])
 def test_tall_handles_stand_on_the_lifted_base(handle_models, key):
     """Lifts half as high as wide and as high as wide (slopes up to 40 degrees). Measured up
-    to 2.07 degrees where the bound is 3 ("tall", decimation 0.2, kernel 1) and 2.54 where it is
-    6 (python bench/edits_bench.py --no-scans, 2026-12-05). The steep lifts are what needs each point hung from its foot: the base positions of a
-    handle's top drift from its foot on the way down through the levels, and a steep lift
-    stretches the base along its slope by 1 / cos(slope); hung from those positions, the
-    slender handles leaned 5.5 degrees."""
+    to 1.65 degrees where the bound is 3 ("tall", decimation 0.2, kernel 1) and 2.47 where it is
+    6 (python bench/edits_bench.py --no-scans, 2026-12-06). The steep lifts are what needs each
+    point hung from its foot: the base positions of a handle's top drift from its foot on the way
+    down through the levels, and a steep lift stretches the base along its slope by
+    1 / cos(slope); hung from those positions, the slender handles leaned 5.5 degrees.
+
+    By principal axes (the issue's measure), on the lifts half as high as wide: at most 0.89
+    degrees where the bound is 3 and 1.16 where it is 6. On the lifts as high as wide it is not
+    asserted: 3.31 ("tall", 0.2, kernel 1) and 3.36 ("slender", kernel 1) where the bound is 3,
+    so issue 16 stays open on them. The lift stretches a handle sideways, up to 1.5 times its
+    width, which leaves it less elongated, so the same lean (1.4-1.7 degrees) tilts its
+    principal axis twice as far."""
     points, handle, centres, dec, height = handle_models[key]
     assert np.ptp(dec.base[:, 2]) < 0.25 * height  # the handles are in the detail, not the base
     spacing = 0.5
@@ -85,15 +105,19 @@ def test_tall_handles_stand_on_the_lifted_base(handle_models, key):
         for steepness in (0.5, 1.0):
             lift = steepness * radius
             result = ps.reconstruct(dec, base=gaussian_lift(dec.base, centre, radius, lift))
-            angles = handle_axis_angles(result, points, handle, centres,
-                                        lambda c: lift_normal(c, centre, radius, lift)[0])
+            normal_at = lambda c: lift_normal(c, centre, radius, lift)[0]  # noqa: E731
+            angles = handle_axis_angles(result, points, handle, centres, normal_at)
             bound = 3.0 if radius >= spacing else 6.0
             assert angles.max() < bound, (centre, radius, lift, angles.round(2))
+            if steepness == 0.5:
+                principal = handle_principal_axis_angles(result, handle, centres, normal_at)
+                assert principal.max() < bound, (centre, radius, lift, principal.round(2))
 
 
 # Planes the requirement's figures were not tuned on: other sizes, handle counts, proportions
-# (3.3-3.8 times taller than wide, 4-6 widths apart) and sample spacings. Measured 2026-12-05 at
-# lifts half as high as wide: at most 1.33 degrees where the bound is 3, and 1.33 where it is 6.
+# (3.3-3.8 times taller than wide, 4-6 widths apart) and sample spacings. Measured 2026-12-06 at
+# lifts half as high as wide: at most 1.08 degrees where the bound is 3, and 1.28 where it is 6;
+# by principal axes 1.22 and 1.63.
 OTHER_PLANES = {  # (size, count, width, height, sample spacing, decimation, kernel, levels)
     "wide plane, 5 x 5": (3.0, 5, 0.12, 0.45, 0.024, 0.2, 1.0, 6),
     "small plane, 3 x 3": (1.5, 3, 0.1, 0.38, 0.016, 0.2, 2.0, 5),
@@ -102,9 +126,12 @@ OTHER_PLANES = {  # (size, count, width, height, sample spacing, decimation, ker
 }
 
 
-# Lifts as high as wide (slopes up to 40 degrees) on the same planes. Measured 2026-12-05 at most
-# 2.86 degrees where the bound is 3 (the small 3 x 3 plane) and 2.67 where it is 6. These are the
-# closest to the bound, and they move with the decomposition's last bits: before every CPU
+# Lifts as high as wide (slopes up to 40 degrees) on the same planes. Measured 2026-12-06 at most
+# 2.44 degrees where the bound is 3 (the small 3 x 3 plane) and 2.57 where it is 6; by principal
+# axes 3.36 on the wide plane with kernel 2, which is not asserted (issue 16 stays open on it).
+# With feet at the nearest base point in space instead of right below each point (before
+# 2026-12-06) the small plane gave 2.86: a handle's top stood on the crown of the base's bump
+# under it, off to one side. These move with the decomposition's last bits: before every CPU
 # decomposed alike (moment_lanes.h), the small plane gave 3.23 on one and the tall handles 3.15
 # on another. On the wide plane with kernel 2, feet sought around the points' own base positions
 # (as before 2026-12-05) gave 3.60 and 4.72: the handles' tops had drifted to one side on the
@@ -129,9 +156,13 @@ def test_tall_handles_on_other_planes_stand_on_the_lifted_base(name, steepness):
             radius = factor * spacing
             lift = steepness * radius
             result = ps.reconstruct(dec, base=gaussian_lift(dec.base, centre, radius, lift))
-            angles = handle_axis_angles(result, points, handle, centres,
-                                        lambda c: lift_normal(c, centre, radius, lift)[0])
-            assert angles.max() < (3.0 if factor >= 1.0 else 6.0), (name, centre, radius, lift, angles.round(2))
+            normal_at = lambda c: lift_normal(c, centre, radius, lift)[0]  # noqa: E731
+            angles = handle_axis_angles(result, points, handle, centres, normal_at)
+            bound = 3.0 if factor >= 1.0 else 6.0
+            assert angles.max() < bound, (name, centre, radius, lift, angles.round(2))
+            if steepness == 0.5:
+                principal = handle_principal_axis_angles(result, handle, centres, normal_at)
+                assert principal.max() < bound, (name, centre, radius, lift, principal.round(2))
 
 def test_every_band_is_applied_along_the_lifted_surface_normal():
     """Requirement 2: a flat base with gentle detail, lifted; at every level the direction a
@@ -282,7 +313,7 @@ def offset_lengths_kept(dec, edited):
 
 # The offsets turn with the base: their lengths stay. Under brush lifts their angle to an
 # independent 24-point PCA normal of the edited base is not yet within the issue's 3 degrees
-# everywhere (3.4-9 degrees on 6 of the 18 brushes, bench/edits_bench.py; issue 16 stays open on it),
+# everywhere (4.1-9.1 degrees on 5 of the 18 brushes, bench/edits_bench.py; issue 16 stays open on it),
 # so for brushes it is not asserted here.
 @pytest.mark.parametrize("seed", [1, 7])
 def test_a_brush_lift_on_a_scan_keeps_every_offset_length(scan, seed):
@@ -338,9 +369,9 @@ def test_brush_lifts_on_a_scan_turn_the_detail_where_the_reference_is_defined(sc
     """Requirement 3's brushes (5, 10 and 15% of the diagonal at three places), measured over the
     points where the 24-neighbour PCA reference is well defined on both bases and its neighbours
     face one way, for the brushes where that holds for at least two thirds of the moved points
-    (all but Max Planck's 5% brush at #24043, 59%). Measured: at most 2.74 degrees at the 95th
-    percentile (Max Planck 0.91-2.68, bunny 0.45-2.74); over every moved point, 7 of the 18
-    brushes are above 3 (bench/edits_bench.py)."""
+    (all but Max Planck's 5% brush at #24043, 59%). Measured: at most 2.88 degrees at the 95th
+    percentile (Max Planck 1.02-2.15, bunny 0.46-2.88); over every moved point, 5 of the 18
+    brushes are above 3 (bench/edits_bench.py, 2026-12-06)."""
     name, points, dec = scan
     base, diag = dec.base, diagonal(dec.base)
     n0 = pca_normals(base, dec.normals(0))
@@ -369,7 +400,9 @@ def test_brush_lifts_on_a_scan_turn_the_detail_where_the_reference_is_defined(sc
 
 @pytest.mark.parametrize("end", [1, -1])
 def test_detail_follows_a_bend_of_one_part_on_a_scan(scan, end):
-    """Requirement 3's bend: measured 1.1-1.4 degrees at the 95th percentile (bench/edits_bench.py)."""
+    """Requirement 3's bend: measured 1.3-2.2 degrees at the 95th percentile (bench/edits_bench.py,
+    2026-12-06; Max Planck's - end is the 2.2: feet right below each point follow the bend a
+    little less closely there than the nearest base point in space, which gave 1.9)."""
     name, points, dec = scan
     order = np.argsort(np.ptp(dec.base, axis=0))
     along, towards = end * np.eye(3)[order[2]], np.eye(3)[order[0]]

@@ -79,8 +79,15 @@ IndexList base_feet(const Points& base, const Points& base_normals, const Points
                                          [&](Index c) { return (centre - base.row(c)).squaredNorm(); }, same_side);
         if ((base.row(nearest) - centre).squaredNorm() <= reach2) start = nearest;
       }
-      feet[i] = walk_rings(rings, ring, start, (q - base.row(start)).squaredNorm(),
-                           [&](Index c) { return (q - base.row(c)).squaredNorm(); },
+      // Downhill in the distance from the line through q along the base normal: the foot lies
+      // right below q. The nearest base point in space is pulled towards whatever of the base
+      // rises nearest to q, such as the crown of a bump under a tall feature, and a feature
+      // whose points stand on one side of their feet fans out unevenly under a curved edit.
+      auto off_line = [&](Index c) {
+        const Eigen::RowVector3d d = q - base.row(c);
+        return (d - d.dot(n) * n).squaredNorm();
+      };
+      feet[i] = walk_rings(rings, ring, start, off_line(start), off_line,
                            [&](Index c) { return (base.row(c) - centre).squaredNorm() <= reach2 && same_side(c); });
     }
   }, {}, 4096);

@@ -27,8 +27,9 @@ inline int ring_size_for(Eigen::Index points, int size = base_ring_size) {
 }
 IndexList base_rings(const Points& base, const IndexList& parts = {}, int size = base_ring_size);
 
-// Where each point's detail stands on the base: the base point nearest to the point itself
-// (its finest level), found by walking the rings downhill, so that the detail turns with the
+// Where each point's detail stands on the base: the base point nearest to the line through
+// the point itself (its finest level) along its base normal, that is right below it, found by
+// walking the rings downhill, so that the detail turns with the
 // base beneath it, not with the spot its own base position happens to fall on (under tall
 // detail the base positions of one feature spread over more than the feature, and a lift
 // curving across that spread bent it). The foot is taken only within a quarter of the point's
