@@ -109,9 +109,9 @@ def test_tall_handles_stand_on_the_lifted_base(handle_models, key):
             angles = handle_axis_angles(result, points, handle, centres, normal_at)
             bound = 3.0 if radius >= spacing else 6.0
             assert angles.max() < bound, (centre, radius, lift, angles.round(2))
-            if steepness == 0.5:
+            if steepness == 0.5:  # the issue asks 3 / 6; held well within them (measured 0.89 / 1.16)
                 principal = handle_principal_axis_angles(result, handle, centres, normal_at)
-                assert principal.max() < bound, (centre, radius, lift, principal.round(2))
+                assert principal.max() < min(bound, 1.5), (centre, radius, lift, principal.round(2))
 
 
 # Planes the requirement's figures were not tuned on: other sizes, handle counts, proportions
@@ -160,9 +160,9 @@ def test_tall_handles_on_other_planes_stand_on_the_lifted_base(name, steepness):
             angles = handle_axis_angles(result, points, handle, centres, normal_at)
             bound = 3.0 if factor >= 1.0 else 6.0
             assert angles.max() < bound, (name, centre, radius, lift, angles.round(2))
-            if steepness == 0.5:
+            if steepness == 0.5:  # the issue asks 3 / 6; held well within them (measured 1.22 / 1.63)
                 principal = handle_principal_axis_angles(result, handle, centres, normal_at)
-                assert principal.max() < bound, (name, centre, radius, lift, principal.round(2))
+                assert principal.max() < min(bound, 2.0), (name, centre, radius, lift, principal.round(2))
 
 def test_every_band_is_applied_along_the_lifted_surface_normal():
     """Requirement 2: a flat base with gentle detail, lifted; at every level the direction a

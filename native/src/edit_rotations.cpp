@@ -71,8 +71,8 @@ IndexList base_feet(const Points& base, const Points& base_normals, const Points
                                                      : Eigen::RowVector3d(base.row(row));
       auto same_side = [&](Index c) { return base_normals.row(c).dot(n) >= 0.5; };
       // A moved centre: first to the base point nearest it, if that is within reach (else the
-      // walk starts from the point's own base position, as before); then downhill towards q
-      // within reach of the centre.
+      // walk starts from the point's own base position, as before); then downhill towards the
+      // line through q along n, within reach of the centre.
       Index start = static_cast<Index>(i);
       if (beyond > 0.0) {
         const Index nearest = walk_rings(rings, ring, start, beyond * beyond,

@@ -29,17 +29,17 @@ IndexList base_rings(const Points& base, const IndexList& parts = {}, int size =
 
 // Where each point's detail stands on the base: the base point nearest to the line through
 // the point itself (its finest level) along its base normal, that is right below it, found by
-// walking the rings downhill, so that the detail turns with the
-// base beneath it, not with the spot its own base position happens to fall on (under tall
-// detail the base positions of one feature spread over more than the feature, and a lift
-// curving across that spread bent it). The foot is taken only within a quarter of the point's
-// offset of a centre, and only where the base faces the same way (normals within 60 degrees):
-// where the base curves inward under tall detail the nearest base point can lie anywhere, and
-// the point's own base position is the better guess. The centre is the point's own base
-// position, moved towards the point right below the point (in the tangent plane of its base
-// position) just far enough that it is within reach, so that the feet of a tall feature whose
-// points drifted far sideways still lie under it. Otherwise the point stands on its own base
-// position. Reconstruction turns a point by its foot's rotation and hangs it from its foot
+// walking the rings downhill, so that the detail turns with the base beneath it, not with the
+// spot its own base position happens to fall on (under tall detail the base positions of one
+// feature spread over more than the feature, and a lift curving across that spread bent it).
+// The foot is taken only within a quarter of the point's offset of a centre, and only where
+// the base faces the same way (normals within 60 degrees): where the base curves inward under
+// tall detail the base below the point can lie anywhere, and the point's own base position is
+// the better guess. The centre is the point's own base position, moved towards the point right
+// below the point (in the tangent plane of its base position) just far enough that it is
+// within reach, so that the feet of a tall feature whose points drifted far sideways still lie
+// under it. Otherwise the point stands on its own base position. Reconstruction turns a point
+// by its foot's rotation and hangs it from its foot
 // (reconstruction.cpp).
 // base, base_normals, finest  #P by 3; rings from base_rings(base, parts, edit_ring_size).
 // Returns #P base point indices.
