@@ -88,9 +88,9 @@ def scans(names=ISSUE_SCANS, seeds=(1, 3, 7)) -> None:
             print(f"| {name} | skipped: not in {SHARED_DATA} | | | | | |")
             continue
         points = ps.io.read(path).points
-        if isinstance(names, dict) and names[name] > 1:
-            points = points[::names[name]]
-            name = f"{name}, every {names[name]}th point"
+        step = names[name] if isinstance(names, dict) else 1
+        points = points[::step]
+        scan_label = name if step == 1 else f"{name}, every {step}th point"
         dec = ps.decompose(points, levels=4)
         base, diag = dec.base, diagonal(dec.base)
         n0 = pca_normals(base, dec.normals(0))
@@ -123,7 +123,7 @@ def scans(names=ISSUE_SCANS, seeds=(1, 3, 7)) -> None:
             clear = use & defined & plane_is_clear(edited)
             on_clear = np.percentile(change[0][clear], 95)
             length = np.abs(l1 / np.maximum(l0, 1e-300) - 1)[use].max()
-            print(f"| {name} | {label} | {use.sum()} | {row[0]:.2f} | {row[1]:.2f} | {on_clear:.2f}"
+            print(f"| {scan_label} | {label} | {use.sum()} | {row[0]:.2f} | {row[1]:.2f} | {on_clear:.2f}"
                   f" ({clear.sum() / use.sum():.0%}) | {length:.1e} |")
 
 

@@ -46,7 +46,8 @@ def handle_principal_axis_angles(result, handle, centres, normal_at):
     handle_axis_angles."""
     out = []
     for h, centre in enumerate(centres):
-        q = result[handle == h] - result[handle == h].mean(axis=0)
+        mine = result[handle == h]
+        q = mine - mine.mean(axis=0)
         axis = np.linalg.eigh(q.T @ q)[1][:, 2]
         out.append(np.degrees(np.arccos(min(1.0, abs(axis @ normal_at(centre))))))
     return np.array(out)
