@@ -215,11 +215,17 @@ def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int) -> list
     for l in range(k):
         ensure_key(obj, level_name(l), levels[l]).value = 0.0
     for l in range(k):
+        before = get(mesh, band_name(l))
+        chosen = before.vertex_group if before is not None else ""
         kb = ensure_key(obj, band_name(l), bands[l], slider=(BAND_MIN, BAND_MAX))
         kb.value = 0.0
-        # A mask painted for an earlier decompose stays in use; a new band has none (see ensure_mask).
+        # A mask in use for an earlier decompose stays in use: the add-on's painted one, or any
+        # vertex group the artist picked for the band key; a new band has none (see ensure_mask).
         mask = obj.vertex_groups.get(mask_name(l))
-        kb.vertex_group = mask.name if mask is not None and mask.name in groups else ""
+        if chosen and obj.vertex_groups.get(chosen) is not None:
+            kb.vertex_group = chosen
+        else:
+            kb.vertex_group = mask.name if mask is not None and mask.name in groups else ""
     for name in sorted(mine - set(layout) - set(RESULTS)):
         remove_key(obj, name)
     kept = []
@@ -229,6 +235,7 @@ def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int) -> list
             if name + PREVIOUS in mine:  # an artist's key of that name is refused before (layout_problem)
                 remove_key(obj, name + PREVIOUS)
             kb.name = name + PREVIOUS
+            kb.value = 0.0  # kept, not shown: the new decomposition shows the original
             kept.append(kb.name)
     # The "(previous)" keys stay the add-on's: the next Decompose replaces them, Clear keeps them.
     mesh[OWNED] = layout + [name + PREVIOUS for name in (EDIT, FILTER) if get(mesh, name + PREVIOUS) is not None
@@ -238,9 +245,9 @@ def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int) -> list
     return kept
 
 
-def remove_layout(obj, k: int) -> None:
+def remove_layout(obj, k: int) -> list:
     """Removes the keys this add-on made, but for the kept "(previous)" results, which stay
-    recorded as the add-on's (a later Decompose replaces them)."""
+    recorded as the add-on's (a later Decompose replaces them). Returns their names."""
     mesh = obj.data
     active = obj.active_shape_key.name if obj.active_shape_key is not None else None
     mine = owned(mesh, k)
@@ -252,6 +259,7 @@ def remove_layout(obj, k: int) -> None:
     elif OWNED in mesh.keys():
         del mesh[OWNED]
     _restore_active(obj, active)
+    return kept
 
 
 def add_owned(mesh, name: str) -> None:

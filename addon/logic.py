@@ -31,6 +31,7 @@ __all__ = [
     "check_points",
     "levels_that_fit",
     "parts_message",
+    "engine_message",
 ]
 
 
@@ -292,3 +293,15 @@ def parts_message(message: str, neighbors: int, levels: int) -> str:
     return (f"every connected part of the mesh is too small to decompose alone{largest} with Levels {levels} "
             f"and Neighbours {neighbors}: Keep Parts Apart decomposes each part by itself. Lower Neighbours "
             "or Levels, or turn off Keep Parts Apart to decompose the parts as one surface")
+
+
+PLANAR_HINT = " (use project() to work with planar data)"  # the engine's hint for Python users
+
+
+def engine_message(message: str, neighbors: int, levels: int) -> str:
+    """The engine's refusal in the add-on's terms: parts_message, and a flat mesh's refusal
+    without the hint meant for Python users."""
+    if PLANAR_HINT in message:
+        return message.replace(PLANAR_HINT, ": a flat mesh is all base. Give it relief (sculpt, or a Displace "
+                                             "modifier, applied) to have detail to edit")
+    return parts_message(message, neighbors, levels)

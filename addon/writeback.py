@@ -85,7 +85,7 @@ def clear(obj) -> list:
     settings = mesh.multiscale
     k = max(settings.n_bands, 0)
     groups = keys.owned_groups(mesh, k)  # only these vertex groups are the add-on's to remove
-    keys.remove_layout(obj, k)
+    previous = keys.remove_layout(obj, k)
     storage.clear(mesh)
     drop_detail_colors(mesh)
     notes = []
@@ -112,6 +112,8 @@ def clear(obj) -> list:
         del mesh[keys.GROUPS]
     if painted:
         notes.append(f"kept the painted {', '.join(painted)} (delete them under Vertex Groups if unwanted)")
+    if previous:
+        notes.append(f"kept the earlier results {', '.join(previous)} (delete them under Shape Keys if unwanted)")
     if keys.remove_created_basis(obj) is False:
         notes.append("kept the Basis key: other shape keys need it")
     settings.n_vertices = 0
@@ -233,7 +235,7 @@ def show_result(obj, name: str, co: np.ndarray) -> None:
     kb = keys.ensure_key(obj, name, co)
     keys.add_owned(mesh, name)
     kb.value = 1.0
-    for other in (keys.EDIT, keys.FILTER):
+    for other in keys.RESULTS:  # the kept "(previous)" results too: this one is shown alone
         if other != name:
             ok = keys.get(mesh, other)
             if ok is not None:

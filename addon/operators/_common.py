@@ -7,6 +7,29 @@ import bpy
 from .. import state
 
 
+def mode_problem(obj, mode: str) -> str | None:
+    """Why Blender would refuse to put ``obj`` in ``mode`` (it edits, sculpts and paints only
+    visible objects), or None."""
+    if mode == "OBJECT" or obj.mode == mode or obj.visible_get():
+        return None
+    return f"'{obj.name}' is hidden: unhide it (Alt+H in the viewport) to enter {mode.replace('_', ' ').title()} mode"
+
+
+def set_mode(obj, mode: str) -> str | None:
+    """Puts ``obj`` (the active object) in ``mode``; Blender's refusal comes back as a message
+    for a report instead of a traceback."""
+    problem = mode_problem(obj, mode)
+    if problem:
+        return problem
+    if obj.mode == mode:
+        return None
+    try:
+        bpy.ops.object.mode_set(mode=mode)
+    except RuntimeError as exc:
+        return f"'{obj.name}' could not enter {mode.replace('_', ' ').title()} mode: {str(exc).strip()}"
+    return None
+
+
 class DecomposedOperator:
     """Mixin: poll explains what is missing; execute re-checks before touching data."""
 
@@ -31,12 +54,16 @@ class DecomposedOperator:
             self.report({"ERROR"}, problem)
             return None
         self.entered_mode = obj.mode
-        if obj.mode != "OBJECT":
-            bpy.ops.object.mode_set(mode="OBJECT")
+        problem = set_mode(obj, "OBJECT")
+        if problem:
+            self.report({"ERROR"}, problem)
+            return None
         return obj
 
     def return_to_mode(self, obj) -> None:
         """Back to the mode the artist ran the operator from (Edit, Sculpt, Weight Paint...)."""
         mode = getattr(self, "entered_mode", "OBJECT")
         if mode != "OBJECT" and obj.mode != mode:
-            bpy.ops.object.mode_set(mode=mode)
+            problem = set_mode(obj, mode)
+            if problem:
+                self.report({"WARNING"}, problem)

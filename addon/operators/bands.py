@@ -5,7 +5,7 @@ from __future__ import annotations
 import bpy
 
 from .. import keys
-from ._common import DecomposedOperator
+from ._common import DecomposedOperator, set_mode
 
 
 class POINTSCALE_OT_paint_band_mask(DecomposedOperator, bpy.types.Operator):
@@ -41,7 +41,9 @@ class POINTSCALE_OT_paint_band_mask(DecomposedOperator, bpy.types.Operator):
         kb.vertex_group = vg.name
         obj.vertex_groups.active_index = vg.index
         if self.enter_paint and not bpy.app.background:
-            bpy.ops.object.mode_set(mode="WEIGHT_PAINT")
+            problem = set_mode(obj, "WEIGHT_PAINT")
+            if problem:
+                self.report({"WARNING"}, f"Paint band mask: '{vg.name}' is ready, but {problem}")
         return {"FINISHED"}
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import bpy
 
 from .. import state, storage, writeback
+from ._common import set_mode
 
 
 class POINTSCALE_OT_clear(bpy.types.Operator):
@@ -30,8 +31,10 @@ class POINTSCALE_OT_clear(bpy.types.Operator):
 
     def execute(self, context):
         obj = context.active_object
-        if obj.mode != "OBJECT":
-            bpy.ops.object.mode_set(mode="OBJECT")
+        problem = set_mode(obj, "OBJECT")
+        if problem:
+            self.report({"ERROR"}, f"Clear: {problem}")
+            return {"CANCELLED"}
         for note in writeback.clear(obj):
             self.report({"INFO"}, f"Clear '{obj.name}': {note}")
         return {"FINISHED"}

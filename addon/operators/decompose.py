@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import compute, engine, keys, mesh_io, mirror_modifier, preferences, state, storage, writeback
 from ..job import Job
+from ._common import set_mode
 
 
 def _problem(context):
@@ -99,7 +100,7 @@ def _computed(ps, points, kwargs, progress=None):
     try:
         layout = compute.decompose(ps, points, progress=progress, **kwargs)
     except ValueError as exc:  # the engine's words for Keep Parts Apart, in the panel's
-        raise ValueError(compute.logic.parts_message(str(exc), kwargs["neighbors"], kwargs["levels"])) from None
+        raise ValueError(compute.logic.engine_message(str(exc), kwargs["neighbors"], kwargs["levels"])) from None
     return layout, writeback.key_data(layout, points, kwargs, ps.__version__)
 
 
@@ -141,13 +142,16 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         if obj.type != "MESH" or len(obj.data.vertices) != n:
             self.report({"ERROR"}, f"'{obj.name}' changed while it was being decomposed; nothing was written")
             return {"CANCELLED"}
-        if obj.mode != "OBJECT":
-            # Edit, Sculpt or Weight Paint on a key that is about to change: leave it first.
-            bpy.ops.object.mode_set(mode="OBJECT")
+        # Edit, Sculpt or Weight Paint on a key that is about to change: leave it first.
+        problem = set_mode(obj, "OBJECT")
+        if problem:
+            self.report({"ERROR"}, f"Decompose: {problem}; nothing was written")
+            return {"CANCELLED"}
         kept = writeback.apply_layout(obj, layout, basis=points, data=data)
         k = layout.k
         if kept:
-            self.report({"INFO"}, f"Decompose '{obj.name}': the earlier results are kept as {', '.join(kept)}")
+            self.report({"INFO"}, f"Decompose '{obj.name}': the earlier results are kept as "
+                                  f"{', '.join(kept)}, switched off")
         for message in layout.warnings:
             self.report({"WARNING"}, f"Decompose '{obj.name}': {message}")
         if getattr(self, "_levels_note", None):

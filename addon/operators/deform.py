@@ -5,7 +5,7 @@ from __future__ import annotations
 import bpy
 
 from .. import compute, engine, group_weights, keys, mesh_io, writeback
-from ._common import DecomposedOperator
+from ._common import DecomposedOperator, mode_problem, set_mode
 
 
 def report_folds(op, obj, folds, done: str) -> None:
@@ -41,17 +41,23 @@ class POINTSCALE_OT_edit_base(DecomposedOperator, bpy.types.Operator):
         obj = self.guard(context)
         if obj is None:
             return {"CANCELLED"}
+        problem = mode_problem(obj, self.mode)  # before anything changes
+        if problem:
+            self.report({"ERROR"}, f"Edit base: {problem}")
+            self.return_to_mode(obj)
+            return {"CANCELLED"}
         mesh = obj.data
         idx = mesh.shape_keys.key_blocks.find(keys.level_name(0))
         obj.active_shape_key_index = idx
         obj.show_only_shape_key = False
         mesh.multiscale.scale = 0.0  # object mode shows Level 0 too
-        for name in (keys.EDIT, keys.FILTER):
+        for name in keys.RESULTS:
             kb = keys.get(mesh, name)
             if kb is not None:
                 kb.value = 0.0
-        if self.mode != "OBJECT":
-            bpy.ops.object.mode_set(mode=self.mode)
+        problem = set_mode(obj, self.mode)
+        if problem:
+            self.report({"WARNING"}, f"Edit base: 'Level 0' is active, but {problem}")
         return {"FINISHED"}
 
 

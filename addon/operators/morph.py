@@ -6,6 +6,7 @@ import bpy
 import numpy as np
 
 from .. import compute, engine, keys, mesh_io, state
+from ._common import set_mode
 
 
 def _world_points(obj, into):
@@ -30,6 +31,10 @@ def morph_problem(context):
         return "The morph target must be another mesh object"
     if s.morph_base == "OBJECT" and (s.morph_base_object is None or s.morph_base_object.type != "MESH"):
         return "Choose a base mesh, or use the automatic ellipsoid"
+    if len(target.data.vertices) == 0:
+        return f"The morph target '{target.name}' has no vertices"
+    if s.morph_base == "OBJECT" and len(s.morph_base_object.data.vertices) == 0:
+        return f"The base mesh '{s.morph_base_object.name}' has no vertices"
     return None
 
 
@@ -55,8 +60,10 @@ class POINTSCALE_OT_morph(bpy.types.Operator):
             self.report({"ERROR"}, problem)
             return {"CANCELLED"}
         a_obj = context.active_object
-        if a_obj.mode != "OBJECT":
-            bpy.ops.object.mode_set(mode="OBJECT")
+        problem = set_mode(a_obj, "OBJECT")
+        if problem:
+            self.report({"ERROR"}, f"Morph: {problem}")
+            return {"CANCELLED"}
         s = a_obj.data.multiscale
         b_obj = s.morph_target or next(o for o in context.selected_objects if o is not a_obj and o.type == "MESH")
         a = mesh_io.read_basis(a_obj.data).astype(np.float64)
