@@ -10,7 +10,9 @@ from ._common import set_mode
 
 
 def _world_points(obj, into):
-    """Basis of ``obj`` in the local space of ``into``."""
+    """Basis of ``obj`` in the local space of ``into``, with edits still in its Edit mode."""
+    if obj.mode == "EDIT":
+        obj.update_from_editmode()  # B or the base in Edit mode with A active: read what is shown
     co = mesh_io.read_basis(obj.data).astype(np.float64)
     m = np.array(into.matrix_world.inverted() @ obj.matrix_world)
     return co @ m[:3, :3].T + m[:3, 3]

@@ -97,3 +97,26 @@ def test_a_morph_target_without_vertices_is_named():
     assert not bpy.ops.pointscale.morph.poll()
     with pytest.raises(RuntimeError, match="'Empty B' has no vertices"):
         bpy.ops.pointscale.morph()
+
+
+def test_morph_reads_a_target_left_in_edit_mode_as_shown():
+    import bmesh
+
+    a = h.mesh_object(h.noisy_sphere(3000), name="A")
+    b = h.mesh_object(h.noisy_sphere(2500, seed=1), name="B")
+    a.data.multiscale.morph_target = b
+    bpy.context.view_layer.objects.active = b
+    bpy.ops.object.mode_set(mode="EDIT")
+    bm = bmesh.from_edit_mesh(b.data)
+    for v in bm.verts:
+        v.co.z *= 1.5  # an edit not yet written to the mesh
+    bmesh.update_edit_mesh(b.data)
+    bpy.context.view_layer.objects.active = a
+    assert b.mode == "EDIT" and a.mode == "OBJECT"
+    assert bpy.ops.pointscale.morph() == {"FINISHED"}
+    in_edit = h.key(bpy.context.active_object.data, "B detail").copy()
+    bpy.context.view_layer.objects.active = b
+    bpy.ops.object.mode_set(mode="OBJECT")  # now written
+    bpy.context.view_layer.objects.active = a
+    assert bpy.ops.pointscale.morph() == {"FINISHED"}
+    assert np.array_equal(in_edit, h.key(bpy.context.active_object.data, "B detail"))
