@@ -182,8 +182,9 @@ def load(path) -> Decomposition:
             raise ValueError("it holds one array, not the arrays of a decomposition (.npz)")
         with f:
             arrays = dict(f)
-    except MemoryError:
-        raise
+    except MemoryError:  # a crafted header can declare any size: say which file
+        raise ValueError(f"cannot read decomposition {path!s}: its arrays declare more data than fits in "
+                         "memory") from None
     except Exception as exc:  # BadZipFile, zlib.error, EOFError, KeyError from a damaged archive...
         detail = " ".join(str(exc).split()) or type(exc).__name__
         raise ValueError(f"cannot read decomposition {path!s}: {detail}") from None

@@ -42,6 +42,14 @@ def join_signed_values(argv: list[str]) -> list[str]:
     return out
 
 
+def path_given(text: str) -> str:
+    """An -o value that names something: an empty one (an unset shell variable) would be the
+    current folder."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("is empty; name the output")
+    return text
+
+
 def build_parser(formats: str) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pointscale", formatter_class=_Formatter, allow_abbrev=False,
@@ -57,7 +65,7 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
                                    "folder: decomposition.npz, source.npz (the input's attributes) and "
                                    "level_0 .. level_k in the input's format.")
     d.add_argument("input", help=f"the model to decompose ({formats})")
-    d.add_argument("-o", "--output", required=True, help="output folder (created if missing)")
+    d.add_argument("-o", "--output", type=path_given, required=True, help="output folder (created if missing)")
     d.add_argument("--levels", type=int, default=4, help="point clouds P^0..P^k; the detail bands are levels - 1")
     d.add_argument("--decimation", type=float, default=0.25,
                    help="gamma in (0, 1): each coarser level is supported by this fraction of the points")
@@ -93,7 +101,7 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
                        description="Rebuilds the finest level from a decomposition folder, each band scaled by its "
                                    "gain, on the stored or an edited base, with the input's attributes.")
     r.add_argument("decomposition", help="folder written by decompose (or its decomposition.npz)")
-    r.add_argument("-o", "--output", required=True, help="output file; its extension picks the format")
+    r.add_argument("-o", "--output", type=path_given, required=True, help="output file; its extension picks the format")
     r.add_argument("--gains", help="comma-separated gain per band, coarse to fine, e.g. 2,2,1 or -1,1,1 "
                                    "(default: all 1)")
     r.add_argument("--base", help="an edited level 0 (same vertex count and order), in any supported format")
@@ -112,6 +120,6 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
 
     m = sub.add_parser("demo", formatter_class=_Formatter, allow_abbrev=False,
                        help="run the whole pipeline on procedural shapes (no download)")
-    m.add_argument("-o", "--output", default="pointscale-demo", help="output folder")
+    m.add_argument("-o", "--output", type=path_given, default="pointscale-demo", help="output folder")
     m.add_argument("--points", type=int, default=100000, help="points of the demo sphere")
     return parser

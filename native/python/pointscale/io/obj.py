@@ -8,11 +8,11 @@ vertex (the points are what Pointscale processes, so vertices are never split): 
 corners disagree (a UV seam) keeps its first corner's value, with a warning. Polygons are kept as
 they are (no triangulation). Negative (relative) indices are resolved against the counts at the
 end of the file, which is exact when all vertices come before the faces, as in nearly every file.
-Groups, objects, materials and lines (l) are not kept. Read, UVs are the vertex attributes
-texture_u, texture_v (and texture_w of "vt u v w"), colours red, green, blue (and alpha of
-"v x y z r g b a") as the file's floats (0..1 by convention), and the w of "v x y z w" is
-vertex_w; each is written back in its place. Written, 8- and 16-bit integer colours (from PLY or
-LAS) are divided by 255 or 65535; alpha from other formats is not written (most readers take
+Groups, objects, materials and lines (l) are not kept (a warning counts them). Read, UVs are
+the vertex attributes texture_u, texture_v (and texture_w of "vt u v w"), colours red, green,
+blue (and alpha of "v x y z r g b a") as the file's floats (0..1 by convention), and the w of
+"v x y z w" is vertex_w; each is written back in its place. Written, 8- and 16-bit integer
+colours (from PLY or LAS) are divided by 255 or 65535; alpha from other formats is not written (most readers take
 only 6 values on a v line), with a warning like any attribute OBJ has no place for.
 """
 from __future__ import annotations
@@ -114,10 +114,16 @@ def _vertex_extras(scan: Scan) -> tuple:
 def _lines(path: str) -> dict:
     text = read_text(path, "a text OBJ file")
     lines = {"v": [], "vt": [], "vn": [], "f": []}
+    others = {}
     for line in text.splitlines():
         parts = line.split(None, 1)
         if parts and parts[0] in lines:
             lines[parts[0]].append(parts[1].split("#", 1)[0] if len(parts) > 1 else "")
+        elif parts and not parts[0].startswith("#"):
+            others[parts[0]] = others.get(parts[0], 0) + 1
+    if others:  # materials (mtllib, usemtl), groups, objects, smoothing, lines, points...
+        said = ", ".join(f"{count} {keyword}" for keyword, count in others.items())
+        warnings.warn(f"{path}: OBJ lines other than v, vt, vn and f are not kept ({said})", stacklevel=4)
     return lines
 
 

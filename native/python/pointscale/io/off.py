@@ -40,7 +40,7 @@ def read_off(path) -> Scan:
     if not np.isfinite(points).all():
         raise ValueError(f"{path}: non-finite coordinates")
     normals = rows[:, 3:6] if with_normals else None
-    attributes = _colours(rows[:, first_colour:])
+    attributes = _colours(rows[:, first_colour:], path, "vertex")
     faces, face_attributes = _faces(body[nv:nv + nf], nv, path)
     try:
         return Scan(points=points, precision=np.float64, normals=normals, vertex_attributes=attributes,
@@ -132,6 +132,9 @@ def _faces(lines: list, nv: int, path: str):
             extra = {len(r) - 1 - k for r, k in zip(rows, lengths)}
             colours = np.array([r[1 + k:] for r, k in zip(rows, lengths)]) if len(extra) == 1 \
                 else np.zeros((len(rows), 0))
+            if len(extra) > 1:
+                warnings.warn(f"{path}: face lines carry {'/'.join(map(str, sorted(extra)))} values after their "
+                              "indices; not kept (a colour is 3 or 4 values on every face line)", stacklevel=4)
     except (ValueError, OverflowError) as exc:  # OverflowError: a count of inf
         raise ValueError(f"{path}: malformed face lines ({exc})") from None
     if not np.array_equal(flat, np.round(flat)):
@@ -141,7 +144,7 @@ def _faces(lines: list, nv: int, path: str):
     flat = flat.astype(np.int64)
     if flat.size and (flat.min() < 0 or flat.max() >= nv):
         raise ValueError(f"{path}: faces index vertices {int(flat.min())}..{int(flat.max())}, outside 0..{nv - 1}")
-    return polygons(lengths, flat), _colours(colours)
+    return polygons(lengths, flat), _colours(colours, path, "face")
 
 
 def _uniform_faces(lines: list):
@@ -158,9 +161,13 @@ def _uniform_faces(lines: list):
     return np.full(len(lines), k), table[:, 1:1 + k].ravel(), table[:, 1 + k:]
 
 
-def _colours(columns: np.ndarray) -> dict:
-    """Colour columns (3 or 4) as red, green, blue[, alpha]: uint8 when whole numbers 0..255."""
+def _colours(columns: np.ndarray, path: str, element: str) -> dict:
+    """Colour columns (3 or 4) as red, green, blue[, alpha]: uint8 when whole numbers 0..255.
+    Any other count of values (a colour-map index) is not kept, with a warning."""
     if columns.shape[1] not in (3, 4):
+        if columns.shape[1]:
+            warnings.warn(f"{path}: {element} lines carry {columns.shape[1]} values beyond what OFF defines "
+                          "(a colour is 3 or 4); not kept", stacklevel=4)
         return {}
     if np.array_equal(columns, np.round(columns)) and columns.min() >= 0 and columns.max() <= 255 \
             and columns.max() > 1:

@@ -132,6 +132,10 @@ def _scan_of(ply: PlyData, path: str) -> Scan:
                              f"(properties: {', '.join(fprops) or 'none'})")
         if not isinstance(fprops[index], PlyListProperty):
             raise ValueError(f"{path}: face property {index} is not a list")
+        if np.dtype(fprops[index].val_dtype).kind not in "iu":
+            # Read as integers, 2102.7 would silently become vertex 2102.
+            raise ValueError(f"{path}: face property {index} holds {np.dtype(fprops[index].val_dtype).name} "
+                             "values; vertex indices must be integers")
         faces = _lists(face.data[index], np.int64)
         info["face_index"] = {"name": index, "len_dtype": _code(fprops[index].len_dtype),
                               "val_dtype": _code(fprops[index].val_dtype)}

@@ -120,12 +120,50 @@ class Scan:
                 with np.load(arrays, allow_pickle=False) as loaded:
                     if not isinstance(loaded, Mapping):
                         raise ValueError("not an .npz archive")
+                    _check_archive(loaded)
                     return cls.from_arrays({k: _plain(loaded, k) for k in loaded.files}, points, normals)
             except (OSError, ValueError, EOFError) as exc:
                 raise ValueError(f"cannot read scan attributes from {os.fspath(arrays)}: {exc}") from None
         if not isinstance(arrays, Mapping):
             raise ValueError(f"Scan.from_arrays needs a dict of arrays or an .npz path, got {type(arrays).__name__}")
         return _from_arrays(cls, {k: _plain(arrays, k) for k in arrays}, points, normals)
+
+
+# What a Scan's archive may hold, decompressed: far more than any file's attributes take (100
+# float64 properties a point are 800 bytes), and far less than a crafted archive can declare: a
+# megabyte of deflated zeros unpacks to a gigabyte.
+_BYTES_PER_POINT = 4096
+_BYTES_BESIDES = 256 << 20
+
+
+def _check_archive(loaded) -> None:
+    """Refuses, before any entry but the small meta_json is decompressed, an .npz whose entries
+    are not the ones its meta_json names, or whose entries together declare more bytes than its
+    points can take (_BYTES_PER_POINT). The sizes are the archive's own, which also cap what
+    reading an entry decompresses."""
+    infos = {info.filename[:-4] if info.filename.endswith(".npy") else info.filename: info
+             for info in loaded.zip.infolist()}
+    meta_info = infos.get(_META_KEY)
+    if meta_info is None:
+        raise ValueError(f"scan arrays lack {_META_KEY!r}")
+    if meta_info.file_size > 64 << 20:
+        raise ValueError(f"{_META_KEY} declares {meta_info.file_size} bytes")
+    try:
+        meta = json.loads(_as_bytes(_plain(loaded, _META_KEY), _META_KEY).decode("utf-8"))
+        n = int(meta["n_points"])
+        vertex_count, face_count = len(meta["vertex_attributes"]), len(meta["face_attributes"])
+    except (KeyError, TypeError, ValueError, UnicodeDecodeError, RecursionError) as exc:
+        raise ValueError(f"scan arrays: damaged {_META_KEY} ({type(exc).__name__}: {exc})") from None
+    named = {_META_KEY, "faces", "faces_flat", "faces_offsets"}
+    named |= {f"{_VERTEX_PREFIX}{i}" for i in range(vertex_count)} | {f"{_FACE_PREFIX}{i}" for i in range(face_count)}
+    unknown = sorted(k for k in infos if k not in named and not k.startswith(_BYTES_PREFIX))
+    if unknown:
+        raise ValueError(f"scan arrays: unexpected entries {unknown}")
+    declared = sum(info.file_size for info in infos.values())
+    budget = max(n, 0) * _BYTES_PER_POINT + _BYTES_BESIDES
+    if declared > budget:
+        raise ValueError(f"its entries declare {declared} bytes, more than {n} points' attributes can take "
+                         f"({budget}); refused unread")
 
 
 def _from_arrays(cls, arrays: dict, points, normals) -> Scan:

@@ -23,7 +23,7 @@ import numpy as np
 
 from .atomic import atomic_write
 from .scan import Scan
-from .text_tables import IntegerOutOfRange, check_integer_range, numbers, write_rows
+from .text_tables import IntegerOutOfRange, check_integer_range, numbers, open_text, write_rows
 
 _HEADER_MARK = "#"
 _PTS_COLUMNS = {3: (), 4: ("intensity",), 6: ("red", "green", "blue"), 7: ("intensity", "red", "green", "blue")}
@@ -38,7 +38,40 @@ def read_xyz(path) -> Scan:
     else:  # no header, or a first comment that does not name the columns
         names, dtypes = _guess_xyz_columns(rows)
     exact = _wide_integer_columns(path, names, dtypes) if names_given else {}
+    declared = _declared_columns(header, rows.shape[1]) if names_given else set()
+    exact.update(_undeclared_wide_integers(path, rows, names, declared, skip=int(header is not None)))
+    for i, values in exact.items():
+        dtypes[i] = values.dtype.str
     return _scan(path, rows, names, dtypes, {"format": "xyz", "header": bool(names_given)}, exact)
+
+
+def _declared_columns(header: str, ncols: int) -> set:
+    """The columns whose dtype the header gives (name:dtype)."""
+    return {i for i, token in enumerate(header.replace(",", " ").split()[:ncols]) if ":" in token}
+
+
+def _undeclared_wide_integers(path: str, rows: np.ndarray, names: list, declared: set, skip: int) -> dict:
+    """Column index -> exact values of undeclared columns of whole numbers beyond 2**53 (ids,
+    timestamps in ns), which the float64 rows hold only rounded: read again as text and kept as
+    int64 (uint64 past its range). A column written with a decimal point or an exponent stays
+    float64, as written."""
+    wide = [i for i in range(3, rows.shape[1]) if i not in declared and names[i] not in ("nx", "ny", "nz")
+            and np.all(rows[:, i] == np.round(rows[:, i])) and np.abs(rows[:, i]).max() >= 2.0 ** 53]
+    if not wide:
+        return {}
+    with open_text(path, "a text file") as f:
+        texts = np.loadtxt(f, dtype=str, comments="#", skiprows=skip, usecols=wide, ndmin=2)
+    out = {}
+    for j, i in enumerate(wide):
+        try:
+            values = [int(text) for text in texts[:, j].tolist()]
+        except ValueError:
+            continue
+        low, high = min(values), max(values)
+        dtype = np.int64 if low >= -2 ** 63 and high < 2 ** 63 else np.uint64 if low >= 0 and high < 2 ** 64 else None
+        if dtype is not None:
+            out[i] = np.array(values, dtype=dtype)
+    return out
 
 
 def read_pts(path) -> Scan:
@@ -72,9 +105,9 @@ def _pts_rows(path: str):
             raise ValueError(f"{path}: the first line says {count} points, the file has {len(rows)} (truncated?)")
         return rows, [count]
     try:
-        with open(path, "r", encoding="utf-8", errors="strict") as f:
+        with open_text(path, "a text file") as f:
             lines = [line for line in f.read().splitlines() if line.strip()]
-    except (OSError, UnicodeDecodeError):
+    except (OSError, ValueError):
         raise single from None
     parts, blocks, i = [], [], 0
     while i < len(lines):
@@ -142,7 +175,7 @@ def _load(path: str, skip_first: bool):
     if not os.path.isfile(path):
         raise ValueError(f"no such file: {path}")
     try:
-        with open(path, "r", encoding="utf-8", errors="strict") as f:
+        with open_text(path, "a text file") as f:
             first = f.readline()
             header = None
             if skip_first:
@@ -154,9 +187,9 @@ def _load(path: str, skip_first: bool):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # "input contained no data": reported below as no vertices
                 rows = np.loadtxt(f, dtype=np.float64, ndmin=2, comments=None if skip_first else "#")
-    except UnicodeDecodeError:
-        raise ValueError(f"{path}: not a text file") from None
     except ValueError as exc:
+        if str(exc).startswith(path):  # open_text's own words
+            raise
         raise ValueError(f"{path}: unreadable row ({_first_line(exc)})") from None
     except OSError as exc:
         raise ValueError(f"{path}: cannot read ({exc})") from None
@@ -200,7 +233,8 @@ def _wide_integer_columns(path: str, names: list, dtypes: list) -> dict:
     wide = [i for i, d in enumerate(dtypes) if np.dtype(d).kind in "iu" and np.dtype(d).itemsize > 4]
     if not wide:
         return {}
-    texts = np.loadtxt(path, dtype=str, comments="#", skiprows=1, usecols=wide, ndmin=2, encoding="utf-8")
+    with open_text(path, "a text file") as f:
+        texts = np.loadtxt(f, dtype=str, comments="#", skiprows=1, usecols=wide, ndmin=2)
     return {i: _exact_integers(texts[:, j], np.dtype(dtypes[i]), f"column {names[i]}", path)
             for j, i in enumerate(wide)}
 

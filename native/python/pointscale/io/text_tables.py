@@ -62,16 +62,27 @@ def colour_for_text(values: np.ndarray) -> np.ndarray:
     return values.astype(np.float64)
 
 
-def read_text(path: str, what: str) -> str:
-    """The whole text file at `path`; ValueError naming it when it is missing, not UTF-8 text
-    (`what` says what was expected) or unreadable."""
+def open_text(path: str, what: str):
+    """The text file at `path`, open for reading. A binary file (a NUL byte in its first 64 KB)
+    is refused as not `what`. UTF-8 with or without a byte-order mark; a byte that is not UTF-8
+    (a Latin-1 accent in a comment) reads as U+FFFD rather than refusing a valid file: in a
+    number it still fails to parse, with the row named. ValueError when missing or unreadable."""
     if not os.path.isfile(path):
         raise ValueError(f"no such file: {path}")
     try:
-        with open(path, "r", encoding="utf-8", errors="strict") as f:
+        with open(path, "rb") as f:
+            if b"\0" in f.read(65536):
+                raise ValueError(f"{path}: not {what}")
+        return open(path, "r", encoding="utf-8-sig", errors="replace")
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read ({exc})") from None
+
+
+def read_text(path: str, what: str) -> str:
+    """The whole text file at `path` (open_text)."""
+    try:
+        with open_text(path, what) as f:
             return f.read()
-    except UnicodeDecodeError:
-        raise ValueError(f"{path}: not {what}") from None
     except OSError as exc:
         raise ValueError(f"{path}: cannot read ({exc})") from None
 
