@@ -1,8 +1,9 @@
 """The mesh's Mirror modifier as the engine's mirror planes (no bpy: plain values in).
 
-Decompose reads the first Mirror modifier of the stack and passes its planes to the engine, so
-that the half-mesh is decomposed together with its reflection and the seam vertices stay on
-the plane: the modifier keeps merging them at every Scale and gain.
+Decompose reads the Mirror modifiers of the stack (an artist often stacks one for X and one for
+Y) and passes their planes to the engine, so that the part the artist models is decomposed
+together with its reflections and the seam vertices stay on the planes: the modifiers keep
+merging them at every Scale and gain.
 """
 
 from __future__ import annotations
@@ -32,12 +33,36 @@ class MirrorPlanes:
         return f"the Mirror modifier's planes {where} (seam {self.seam:.3g})"
 
 
+def mirror_modifiers(modifiers) -> list:
+    """The Mirror modifiers of the stack that are on in the viewport."""
+    return [m for m in modifiers if m.type == "MIRROR" and m.show_viewport]
+
+
 def first_mirror(modifiers):
-    """The first Mirror modifier of the stack, or None; one hidden in the viewport counts as off."""
-    for modifier in modifiers:
-        if modifier.type == "MIRROR":
-            return modifier if modifier.show_viewport else None
-    return None
+    """The first Mirror modifier of the stack that is on, or None."""
+    found = mirror_modifiers(modifiers)
+    return found[0] if found else None
+
+
+def combined(planes: list) -> tuple[MirrorPlanes | None, str | None]:
+    """The planes of several Mirror modifiers as one set (X from one, Y from the next ...), or
+    (None, why) when two of them mirror along the same axis at different places. The seam is the
+    widest of theirs."""
+    planes = [p for p in planes if p is not None]
+    if not planes:
+        return None, None
+    origin = [0.0, 0.0, 0.0]
+    axes = {}
+    for p in planes:
+        for a in p.axes:
+            i = AXES.index(a)
+            if a in axes and abs(p.origin[i] - origin[i]) > 1e-9 * max(1.0, abs(origin[i])):
+                return None, (f"two Mirror modifiers mirror along {a.upper()} at {origin[i]:.4g} and "
+                              f"{p.origin[i]:.4g}; Pointscale keeps one plane per axis. Turn one off, or turn "
+                              "off Use Mirror Modifier")
+            axes[a] = True
+            origin[i] = p.origin[i]
+    return MirrorPlanes("".join(a for a in AXES if a in axes), tuple(origin), max(p.seam for p in planes)), None
 
 
 def mirror_planes(use_axis, use_merge: bool, use_clip: bool, merge_threshold: float, diagonal: float,

@@ -26,21 +26,27 @@ def _problem(context):
 
 
 def _mirror_planes(obj, points):
-    """The planes of the first Mirror modifier in the mesh's coordinates, or None when there is
-    none (or Use Mirror Modifier is off); ValueError when its settings cannot be honoured."""
-    modifier = mirror_modifier.first_mirror(obj.modifiers)
-    if modifier is None or not obj.data.multiscale.use_mirror_modifier:
+    """The planes of the mesh's Mirror modifiers in its own coordinates, or None when there is
+    none (or Use Mirror Modifier is off); ValueError when their settings cannot be honoured."""
+    modifiers = mirror_modifier.mirror_modifiers(obj.modifiers)
+    if not modifiers or not obj.data.multiscale.use_mirror_modifier:
         return None
-    to_mirror_space = None
-    if modifier.mirror_object is not None:
-        # Blender mirrors in the mirror object's space: the mesh's coordinates -> world -> its.
-        to_mirror_space = np.array(modifier.mirror_object.matrix_world.inverted() @ obj.matrix_world)
     diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
-    planes, problem = mirror_modifier.mirror_planes(
-        tuple(modifier.use_axis), modifier.use_mirror_merge, modifier.use_clip, modifier.merge_threshold,
-        diagonal, to_mirror_space)
+    found = []
+    for modifier in modifiers:
+        to_mirror_space = None
+        if modifier.mirror_object is not None:
+            # Blender mirrors in the mirror object's space: the mesh's coordinates -> world -> its.
+            to_mirror_space = np.array(modifier.mirror_object.matrix_world.inverted() @ obj.matrix_world)
+        planes, problem = mirror_modifier.mirror_planes(
+            tuple(modifier.use_axis), modifier.use_mirror_merge, modifier.use_clip, modifier.merge_threshold,
+            diagonal, to_mirror_space)
+        if problem:
+            raise ValueError(f"{problem} (modifier '{modifier.name}')")
+        found.append(planes)
+    planes, problem = mirror_modifier.combined(found)
     if problem:
-        raise ValueError(f"{problem} (modifier '{modifier.name}')")
+        raise ValueError(f"{problem} (modifiers {', '.join(repr(m.name) for m in modifiers)})")
     return planes
 
 
