@@ -384,7 +384,8 @@ def parts_warning(reports: list[dict], levels: int) -> str | None:
     named = "; ".join(_described(r) for r in short[:_NAMED_IN_WARNING])
     more = len(short) - _NAMED_IN_WARNING
     tail = f"; and {more} smaller part{'s' if more > 1 else ''}" if more > 0 else ""
-    return (f"{len(short)} of {len(reports)} connected parts are too small for levels={levels}: {named}{tail}. "
+    verb = "parts are" if len(short) > 1 else "part is"
+    return (f"{len(short)} of {len(reports)} connected {verb} too small for levels={levels}: {named}{tail}. "
             "Their coarser levels repeat their smoothest one, so their bands there are zero.")
 
 
@@ -392,4 +393,5 @@ def _described(r: dict) -> str:
     c = ", ".join(f"{v:.4g}" for v in r["centre"])
     kept = f"keeps {r['levels']} levels" if r["levels"] > 1 else "keeps no bands"
     why = f" ({r['why']})" if r["why"] and r["why"] != _TOO_FEW else ""
-    return f"part {r['part']} ({r['points']} points from vertex {r['first_vertex']}, around ({c})) {kept}{why}"
+    count = f"{r['points']} point{'s' if r['points'] != 1 else ''}"
+    return f"part {r['part']} ({count} from vertex {r['first_vertex']}, around ({c})) {kept}{why}"
