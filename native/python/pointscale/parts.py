@@ -384,9 +384,9 @@ def parts_warning(reports: list[dict], levels: int) -> str | None:
     named = "; ".join(_described(r) for r in short[:_NAMED_IN_WARNING])
     more = len(short) - _NAMED_IN_WARNING
     tail = f"; and {more} smaller part{'s' if more > 1 else ''}" if more > 0 else ""
-    verb = "parts are" if len(short) > 1 else "part is"
+    verb, their, its = ("parts are", "Their", "their") if len(short) > 1 else ("part is", "Its", "its")
     return (f"{len(short)} of {len(reports)} connected {verb} too small for levels={levels}: {named}{tail}. "
-            "Their coarser levels repeat their smoothest one, so their bands there are zero.")
+            f"{their} coarser levels repeat {its} smoothest one, so {its} bands there are zero.")
 
 
 def _described(r: dict) -> str:
