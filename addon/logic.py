@@ -302,6 +302,6 @@ def engine_message(message: str, neighbors: int, levels: int) -> str:
     """The engine's refusal in the add-on's terms: parts_message, and a flat mesh's refusal
     without the hint meant for Python users."""
     if PLANAR_HINT in message:
-        return message.replace(PLANAR_HINT, ": a flat mesh is all base. Give it relief (sculpt, or a Displace "
-                                             "modifier, applied) to have detail to edit")
+        return message.replace(PLANAR_HINT, ". A flat mesh is all base: give it relief (sculpt it, or apply a "
+                                             "Displace modifier) to have detail to edit")
     return parts_message(message, neighbors, levels)

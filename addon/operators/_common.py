@@ -12,7 +12,8 @@ def mode_problem(obj, mode: str) -> str | None:
     visible objects), or None."""
     if mode == "OBJECT" or obj.mode == mode or obj.visible_get():
         return None
-    return f"'{obj.name}' is hidden: unhide it (Alt+H in the viewport) to enter {mode.replace('_', ' ').title()} mode"
+    shown = mode.replace("_", " ").title()
+    return f"'{obj.name}' is hidden: unhide it (Alt+H in the viewport) to enter {shown} mode"
 
 
 def set_mode(obj, mode: str) -> str | None:
