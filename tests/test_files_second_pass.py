@@ -167,3 +167,21 @@ def test_an_empty_output_is_refused_before_any_work(tmp_path):
         done = run(*command, "-o", "")
         assert done.returncode == 2 and "-o/--output: is empty" in done.stderr, done.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.ply"]
+
+
+def test_a_source_npz_that_is_a_folder_or_names_an_attribute_twice_is_refused(folder):
+    import json
+
+    source = folder / "source.npz"
+    with np.load(source) as loaded:
+        arrays = dict(loaded)
+    meta = json.loads(bytes(arrays["meta_json"]).decode())
+    meta["vertex_attributes"] = meta["vertex_attributes"] * 2
+    arrays["meta_json"] = np.frombuffer(json.dumps(meta).encode(), np.uint8)
+    arrays["vertex_attributes/1"] = arrays["vertex_attributes/0"]
+    np.savez(source, **arrays)
+    assert "twice" in one_line_error(run("reconstruct", str(folder), "-o", str(folder / "r.ply")))
+    source.unlink()
+    source.mkdir()
+    assert "is not a file" in one_line_error(run("reconstruct", str(folder), "-o", str(folder / "r.ply")))
+    assert not (folder / "r.ply").exists()

@@ -50,6 +50,9 @@ def read_source(path: Path):
     """The input's attributes saved beside a decomposition, or None for a folder without them."""
     folder = model_file(path).parent
     source = folder / SOURCE_FILE
+    if source.exists() and not source.is_file():  # read as absent, the result would lose every attribute
+        raise ValueError(f"{source} is not a file: decompose the input again, or remove it to rebuild without the "
+                         "input's attributes and faces")
     if source.is_file():
         try:
             return io.Scan.from_arrays(source)

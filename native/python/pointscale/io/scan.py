@@ -175,6 +175,9 @@ def _from_arrays(cls, arrays: dict, points, normals) -> Scan:
         precision = np.dtype(meta["precision"])
         vertex_names = [str(s) for s in meta["vertex_attributes"]]
         face_names = [str(s) for s in meta["face_attributes"]]
+        for names in (vertex_names, face_names):
+            if len(set(names)) != len(names):  # one name, one attribute: the second would replace the first
+                raise ValueError(f"it names {sorted({n for n in names if names.count(n) > 1})} twice")
         info = meta["format_info"]
     except (KeyError, TypeError, ValueError, UnicodeDecodeError, RecursionError) as exc:
         raise ValueError(f"scan arrays: damaged {_META_KEY} ({type(exc).__name__}: {exc})") from None
