@@ -185,3 +185,12 @@ def test_a_source_npz_that_is_a_folder_or_names_an_attribute_twice_is_refused(fo
     source.mkdir()
     assert "is not a file" in one_line_error(run("reconstruct", str(folder), "-o", str(folder / "r.ply")))
     assert not (folder / "r.ply").exists()
+
+
+def test_a_las_extra_bytes_name_too_long_is_named(tmp_path):
+    name = "a_rather_long_attribute_name_from_a_scanner"
+    scan = ps.io.Scan(points=points(), precision=np.float64, vertex_attributes={name: np.arange(400, dtype=np.float32)})
+    with pytest.raises(ValueError, match=name):
+        ps.io.write(tmp_path / "long.las", scan)
+    ps.io.write(tmp_path / "long.ply", scan)  # and the format it names keeps it
+    assert np.array_equal(ps.io.read(tmp_path / "long.ply").vertex_attributes[name], np.arange(400, dtype=np.float32))

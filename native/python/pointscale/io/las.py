@@ -225,6 +225,10 @@ def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy):
             for j in range(column.shape[1]):
                 params.append(laspy.ExtraBytesParams(name=f"{name}_{j}", type=column.dtype.str.lstrip("<>=|")))
                 values[f"{name}_{j}"] = column[:, j]
+    for p in params:
+        if len(p.name.encode("utf-8")) > 32:  # laspy's own words would not say which attribute
+            raise ValueError(f"attribute {p.name!r} is longer than the 32 bytes a LAS extra-bytes name holds: "
+                             "rename it, or write a format that keeps it (.ply)")
     return values, params
 
 
