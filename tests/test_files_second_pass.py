@@ -194,3 +194,49 @@ def test_a_las_extra_bytes_name_too_long_is_named(tmp_path):
         ps.io.write(tmp_path / "long.las", scan)
     ps.io.write(tmp_path / "long.ply", scan)  # and the format it names keeps it
     assert np.array_equal(ps.io.read(tmp_path / "long.ply").vertex_attributes[name], np.arange(400, dtype=np.float32))
+
+
+def mixed_mesh_with_corner_uvs(path: Path):
+    """Triangles and quads with MeshLab's per-corner texcoord (6 or 8 values a face) and a face
+    quality; returns the face records written."""
+    p = ps.shapes.bumpy_sphere(1500, seed=4)
+    order = np.argsort(np.arctan2(p[:, 1], p[:, 0]))
+    faces = [order[i:i + (4 if i % 3 else 3)] for i in range(0, 1200, 4)]
+    rng = np.random.default_rng(8)
+    vertex = np.array([tuple(r) for r in p], dtype=[("x", "f8"), ("y", "f8"), ("z", "f8")])
+    face = np.empty(len(faces), dtype=[("vertex_indices", "O"), ("texcoord", "O"), ("quality", "f4")])
+    face["vertex_indices"] = [np.asarray(f, "i4") for f in faces]
+    face["texcoord"] = [rng.random(2 * len(f)).astype("f4") for f in faces]
+    face["quality"] = rng.random(len(faces)).astype("f4")
+    PlyData([PlyElement.describe(vertex, "vertex"),
+             PlyElement.describe(face, "face", val_types={"vertex_indices": "i4", "texcoord": "f4"})]).write(str(path))
+    return face
+
+
+def test_face_lists_of_varying_length_survive_every_file(tmp_path):
+    face = mixed_mesh_with_corner_uvs(tmp_path / "mixed.ply")
+    scan = ps.io.read(tmp_path / "mixed.ply")
+    assert {len(t) for t in scan.face_attributes["texcoord"]} == {6, 8}
+    # These faces are a few strips, not one surface: decomposed as one point set (--parts none).
+    assert run("decompose", str(tmp_path / "mixed.ply"), "-o", str(tmp_path / "out"), "--levels", "3",
+               "--parts", "none").returncode == 0
+    assert run("reconstruct", str(tmp_path / "out"), "-o", str(tmp_path / "r.ply"), "--gains", "2,1").returncode == 0
+    for name in ("out/level_0.ply", "out/level_2.ply", "r.ply"):
+        written = PlyData.read(str(tmp_path / name))["face"]
+        assert all(np.array_equal(a, b) for a, b in zip(written["texcoord"], face["texcoord"])), name
+        assert written["texcoord"][0].dtype == np.float32
+        assert np.array_equal(written["quality"], face["quality"]), name
+    scan.format_info["text"] = True  # and as ASCII
+    ps.io.write(tmp_path / "ascii.ply", scan)
+    again = ps.io.read(tmp_path / "ascii.ply").face_attributes["texcoord"]
+    assert all(np.array_equal(a, b) for a, b in zip(again, face["texcoord"]))
+
+
+def test_face_list_offsets_that_do_not_fit_are_refused(tmp_path):
+    mixed_mesh_with_corner_uvs(tmp_path / "mixed.ply")
+    arrays = ps.io.read(tmp_path / "mixed.ply").to_arrays()
+    key = next(k for k in arrays if k.endswith(".offsets"))
+    assert ps.io.Scan.from_arrays(dict(arrays)).n_faces == 300
+    arrays[key] = arrays[key][::-1].copy()
+    with pytest.raises(ValueError, match="offsets do not describe lists"):
+        ps.io.Scan.from_arrays(arrays)

@@ -165,11 +165,15 @@ def _properties(element, skip: set, list_lengths: dict, path: str, prefix: str =
         values = element.data[p.name]
         if isinstance(p, PlyListProperty):
             values = _lists(values, np.dtype(p.val_dtype))
+            list_lengths[prefix + p.name] = _code(p.len_dtype)
             if isinstance(values, list):
+                if element.name == "face":  # kept as lists (per-corner texcoord on triangles and quads)
+                    out[p.name] = [np.array(v, dtype=np.dtype(p.val_dtype).newbyteorder("=")) for v in values]
+                    continue
+                del list_lengths[prefix + p.name]
                 warnings.warn(f"{path}: {element.name} property {p.name} has lists of varying length; not kept",
                               stacklevel=4)
                 continue
-            list_lengths[prefix + p.name] = _code(p.len_dtype)
         # A copy in native byte order: the element may be a memory map of a big-endian file.
         out[p.name] = np.array(values, dtype=np.asarray(values).dtype.newbyteorder("="))
     return out
@@ -215,13 +219,21 @@ def _face_element(scan: Scan, info: dict):
         faces = np.empty(len(scan.faces), dtype=object)
         faces[:] = [f.astype(val) for f in scan.faces]
     columns = {name: faces}
+    value_types = {name: val}
     for attr, values in scan.face_attributes.items():
         if attr == name:
             raise ValueError(f"face attribute {attr!r} clashes with the face index list")
-        columns[attr] = _ply_values(attr, values)
+        if isinstance(values, list):  # lists of varying length, in one PLY type for all of them
+            flat = _ply_values(attr, np.concatenate(values) if values else np.zeros(0, np.float32))
+            lists = np.empty(len(values), dtype=object)
+            lists[:] = np.split(flat, np.cumsum([len(v) for v in values])[:-1])
+            columns[attr] = lists
+            value_types[attr] = flat.dtype
+        else:
+            columns[attr] = _ply_values(attr, values)
     lengths = {name: index.get("len_dtype", "u1")}
     lengths.update({k[len("face."):]: v for k, v in info.get("list_lengths", {}).items() if k.startswith("face.")})
-    return _element("face", _ordered(columns, info.get("face_properties", [])), lengths, val_types={name: val})
+    return _element("face", _ordered(columns, info.get("face_properties", [])), lengths, val_types=value_types)
 
 
 def _element(name: str, columns: dict, list_lengths: dict, val_types=None):

@@ -18,6 +18,7 @@ _VERTEX_PREFIX = "vertex_attributes/"
 _FACE_PREFIX = "face_attributes/"
 _BYTES_PREFIX = "format_bytes/"
 _META_KEY = "meta_json"
+_OFFSETS = ".offsets"  # beside a face attribute of lists of varying length
 
 
 @dataclass(eq=False)
@@ -33,7 +34,9 @@ class Scan:
                        other per-vertex property, with the file's own names and dtypes.
     faces              None, (m, k) int64 when every face has k corners, or a list of m int64
                        arrays for mixed polygons.
-    face_attributes    name -> array of length m (face colours ...).
+    face_attributes    name -> array of length m (face colours ...), or a list of m 1-D arrays of
+                       one dtype when their lengths differ (MeshLab's per-corner texcoord on a mesh
+                       of triangles and quads).
     format_info        what a writer needs to write the same kind of file back (format, comments,
                        text/binary, LAS version, scales, ...). JSON-serialisable, except that
                        values may be `bytes` (LAS VLR payloads), which to_arrays stores raw.
@@ -57,7 +60,7 @@ class Scan:
                 raise ValueError(f"normals has {len(self.normals)} rows for {n} points")
         self.vertex_attributes = _attributes(self.vertex_attributes, n, "vertex attribute")
         self.faces = _faces(self.faces, n)
-        self.face_attributes = _attributes(self.face_attributes, self.n_faces, "face attribute")
+        self.face_attributes = _attributes(self.face_attributes, self.n_faces, "face attribute", lists=True)
         if not isinstance(self.format_info, dict):
             raise ValueError("format_info must be a dict")
 
@@ -100,7 +103,11 @@ class Scan:
         for i, (name, values) in enumerate(self.vertex_attributes.items()):
             arrays[f"{_VERTEX_PREFIX}{i}"] = values
         for i, (name, values) in enumerate(self.face_attributes.items()):
-            arrays[f"{_FACE_PREFIX}{i}"] = values
+            if isinstance(values, list):  # lists of varying length: their values and where each starts
+                arrays[f"{_FACE_PREFIX}{i}"] = np.concatenate(values) if values else np.zeros(0)
+                arrays[f"{_FACE_PREFIX}{i}{_OFFSETS}"] = np.cumsum([0] + [len(v) for v in values]).astype(np.int64)
+            else:
+                arrays[f"{_FACE_PREFIX}{i}"] = values
         # Indices as int32 when they fit: half the size on disk; from_arrays widens them again.
         index = np.int32 if self.n_points <= np.iinfo(np.int32).max else np.int64
         if isinstance(self.faces, np.ndarray):
@@ -156,6 +163,7 @@ def _check_archive(loaded) -> None:
         raise ValueError(f"scan arrays: damaged {_META_KEY} ({type(exc).__name__}: {exc})") from None
     named = {_META_KEY, "faces", "faces_flat", "faces_offsets"}
     named |= {f"{_VERTEX_PREFIX}{i}" for i in range(vertex_count)} | {f"{_FACE_PREFIX}{i}" for i in range(face_count)}
+    named |= {f"{_FACE_PREFIX}{i}{_OFFSETS}" for i in range(face_count)}
     unknown = sorted(k for k in infos if k not in named and not k.startswith(_BYTES_PREFIX))
     if unknown:
         raise ValueError(f"scan arrays: unexpected entries {unknown}")
@@ -190,11 +198,12 @@ def _from_arrays(cls, arrays: dict, points, normals) -> Scan:
     known = {_META_KEY, "faces", "faces_flat", "faces_offsets"} | {_BYTES_PREFIX + k for k in blobs}
     known |= {f"{_VERTEX_PREFIX}{i}" for i in range(len(vertex_names))}
     known |= {f"{_FACE_PREFIX}{i}" for i in range(len(face_names))}
+    known |= {f"{_FACE_PREFIX}{i}{_OFFSETS}" for i in range(len(face_names)) if f"{_FACE_PREFIX}{i}{_OFFSETS}" in arrays}
     unknown = sorted(set(arrays) - known)
     if unknown:
         raise ValueError(f"scan arrays: unexpected entries {unknown}")
     vertex = {name: _entry(arrays, f"{_VERTEX_PREFIX}{i}") for i, name in enumerate(vertex_names)}
-    face = {name: _entry(arrays, f"{_FACE_PREFIX}{i}") for i, name in enumerate(face_names)}
+    face = {name: _face_entry(arrays, f"{_FACE_PREFIX}{i}") for i, name in enumerate(face_names)}
     faces = None
     if "faces" in arrays:
         faces = arrays["faces"]
@@ -238,6 +247,18 @@ def _entry(arrays: dict, key: str) -> np.ndarray:
     if key not in arrays:
         raise ValueError(f"scan arrays lack {key!r}")
     return arrays[key]
+
+
+def _face_entry(arrays: dict, key: str):
+    """A face attribute: its array, or with offsets beside it, its lists of varying length."""
+    values = _entry(arrays, key)
+    if key + _OFFSETS not in arrays:
+        return values
+    offsets = arrays[key + _OFFSETS]
+    if values.ndim != 1 or offsets.ndim != 1 or offsets.dtype.kind not in "iu" or len(offsets) < 1 \
+            or offsets[0] != 0 or offsets[-1] != len(values) or np.any(np.diff(offsets) < 0):
+        raise ValueError(f"scan arrays: {key} and its offsets do not describe lists")
+    return np.split(values, offsets[1:-1]) if len(offsets) > 1 else []
 
 
 def _as_bytes(value: np.ndarray, key: str) -> bytes:
@@ -286,14 +307,22 @@ def _coordinates(values, what: str) -> np.ndarray:
     return values
 
 
-def _attributes(attributes, count: int, what: str) -> dict:
+def _attributes(attributes, count: int, what: str, lists: bool = False) -> dict:
+    """Checked attributes; with `lists`, a value may also be a list of `count` 1-D arrays."""
     if not isinstance(attributes, Mapping):
         raise ValueError(f"{what}s must be a dict of arrays")
     out = {}
     for name, values in attributes.items():
-        values = np.asarray(values)
         if not isinstance(name, str) or not name:
             raise ValueError(f"{what} names must be non-empty strings, got {name!r}")
+        if lists and isinstance(values, list):
+            arrays = [np.asarray(v) for v in values]
+            if len(arrays) != count or any(a.ndim != 1 or a.dtype.kind not in _PLAIN_KINDS for a in arrays):
+                raise ValueError(f"{what} {name!r}: a list must hold {count} 1-D arrays of numbers, one per face")
+            dtype = np.result_type(*arrays) if arrays else np.dtype(np.float64)
+            out[name] = [a.astype(dtype, copy=False) for a in arrays]
+            continue
+        values = np.asarray(values)
         if values.dtype.kind not in _PLAIN_KINDS:
             raise ValueError(f"{what} {name!r} has dtype {values.dtype}; only plain numbers are kept")
         if values.ndim not in (1, 2) or len(values) != count:
