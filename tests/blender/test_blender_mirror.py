@@ -116,12 +116,17 @@ def test_two_axes_and_merge_off():
     modifier.use_mirror_merge = False  # the seam is then the vertices on the planes up to rounding
     before = len(h.evaluated(obj))
     h.decompose(obj, levels=3)
+    assert_seams_on_the_x_and_y_planes(obj, points)
+    assert len(h.evaluated(obj)) == before
+
+
+def assert_seams_on_the_x_and_y_planes(obj, points):
+    """Level 0 holds the vertices on x = 0 and on y = 0 exactly on their planes."""
     level0 = h.key(obj.data, "Level 0")
     for axis in (0, 1):
         on = points[:, axis] == 0.0
         assert on.sum() > 50
         assert np.abs(level0[on, axis]).max() == 0.0, axis
-    assert len(h.evaluated(obj)) == before
 
 
 def test_an_edited_base_and_a_reloaded_decomposition_keep_the_seam():
@@ -172,11 +177,7 @@ def test_stacked_mirror_modifiers_give_every_plane():
         modifier.use_axis = axes
     merged = len(h.evaluated(obj))
     h.decompose(obj, levels=3)
-    level0 = h.key(obj.data, "Level 0")
-    for axis in (0, 1):
-        on = points[:, axis] == 0.0
-        assert on.sum() > 50
-        assert np.abs(level0[on, axis]).max() == 0.0, axis
+    assert_seams_on_the_x_and_y_planes(obj, points)
     for state, shown in shown_states(obj):
         assert len(shown) == merged, state
 
