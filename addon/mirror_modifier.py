@@ -38,12 +38,6 @@ def mirror_modifiers(modifiers) -> list:
     return [m for m in modifiers if m.type == "MIRROR" and m.show_viewport]
 
 
-def first_mirror(modifiers):
-    """The first Mirror modifier of the stack that is on, or None."""
-    found = mirror_modifiers(modifiers)
-    return found[0] if found else None
-
-
 def combined(planes: list) -> tuple[MirrorPlanes | None, str | None]:
     """The planes of several Mirror modifiers as one set (X from one, Y from the next ...), or
     (None, why) when two of them mirror along the same axis at different places. The seam is the

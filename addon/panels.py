@@ -74,7 +74,7 @@ class POINTSCALE_PT_decompose(_Sub, bpy.types.Panel):
         col.prop(s, "keep_parts")
         col.prop(s, "thin_sheets")
         row = col.row()
-        row.active = mirror_modifier.first_mirror(context.active_object.modifiers) is not None
+        row.active = bool(mirror_modifier.mirror_modifiers(context.active_object.modifiers))
         row.prop(s, "use_mirror_modifier")
         row = layout.row()
         row.scale_y = 1.4

@@ -41,7 +41,7 @@ import pointscale as ps  # noqa: E402
 from helpers import SHARED_DATA, diagonal  # noqa: E402
 from test_edits_at_any_scale import (SHAPES, bend, brush, gaussian_lift, handle_axis_angles,  # noqa: E402
                                      handle_principal_axis_angles, lift_normal, pca_normals, plane_is_clear,
-                                     reference_defined)
+                                     reference_defined, rotation_between)
 
 
 def handles() -> None:
@@ -139,24 +139,12 @@ def fixed_set_normals(points, rings, reference):
     return n * np.where(np.einsum("ij,ij->i", n, reference) < 0, -1.0, 1.0)[:, None]
 
 
-def rotations_between(a, b):
-    """#P by 3 by 3: the smallest rotation taking each unit a onto b (Rodrigues)."""
-    v = np.cross(a, b)
-    c = np.einsum("ij,ij->i", a, b)
-    k = np.zeros((len(a), 3, 3))
-    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
-    k[:, 1, 0], k[:, 2, 0], k[:, 2, 1] = v[:, 2], -v[:, 1], v[:, 0]
-    s2 = (v * v).sum(axis=1)
-    f = np.where(s2 > 1e-30, (1 - c) / np.maximum(s2, 1e-300), 0.5)
-    return np.eye(3)[None] + k + np.einsum("nij,njk->nik", k, k) * f[:, None, None]
-
-
 def turned_by_pca(base, edited, offsets, reference, k):
     """The offsets turned, each at its own base position, by the change of its k-neighbour PCA
     normal from the stored base to the edited one: an edit's turn taken from the measure's own
     kind of normal, with another neighbour count."""
     n0 = pca_normals(base, reference, k)
-    return np.einsum("nij,nj->ni", rotations_between(n0, pca_normals(edited, n0, k)), offsets)
+    return np.einsum("nij,nj->ni", rotation_between(n0, pca_normals(edited, n0, k)), offsets)
 
 
 def timings() -> None:

@@ -161,9 +161,7 @@ def _check_archive(loaded) -> None:
         vertex_count, face_count = len(meta["vertex_attributes"]), len(meta["face_attributes"])
     except (KeyError, TypeError, ValueError, UnicodeDecodeError, RecursionError) as exc:
         raise ValueError(f"scan arrays: damaged {_META_KEY} ({type(exc).__name__}: {exc})") from None
-    named = {_META_KEY, "faces", "faces_flat", "faces_offsets"}
-    named |= {f"{_VERTEX_PREFIX}{i}" for i in range(vertex_count)} | {f"{_FACE_PREFIX}{i}" for i in range(face_count)}
-    named |= {f"{_FACE_PREFIX}{i}{_OFFSETS}" for i in range(face_count)}
+    named = _entry_names(vertex_count, face_count)
     unknown = sorted(k for k in infos if k not in named and not k.startswith(_BYTES_PREFIX))
     if unknown:
         raise ValueError(f"scan arrays: unexpected entries {unknown}")
@@ -172,6 +170,14 @@ def _check_archive(loaded) -> None:
     if declared > budget:
         raise ValueError(f"its entries declare {declared} bytes, more than {n} points' attributes can take "
                          f"({budget}); refused unread")
+
+
+def _entry_names(vertex_count: int, face_count: int) -> set:
+    """The entries a Scan's flat-array form may hold besides its format bytes."""
+    names = {_META_KEY, "faces", "faces_flat", "faces_offsets"}
+    names |= {f"{_VERTEX_PREFIX}{i}" for i in range(vertex_count)}
+    names |= {f"{_FACE_PREFIX}{i}{suffix}" for i in range(face_count) for suffix in ("", _OFFSETS)}
+    return names
 
 
 def _from_arrays(cls, arrays: dict, points, normals) -> Scan:
@@ -195,10 +201,7 @@ def _from_arrays(cls, arrays: dict, points, normals) -> Scan:
     for key, value in arrays.items():
         if key.startswith(_BYTES_PREFIX):
             blobs[key[len(_BYTES_PREFIX):]] = _as_bytes(value, key)
-    known = {_META_KEY, "faces", "faces_flat", "faces_offsets"} | {_BYTES_PREFIX + k for k in blobs}
-    known |= {f"{_VERTEX_PREFIX}{i}" for i in range(len(vertex_names))}
-    known |= {f"{_FACE_PREFIX}{i}" for i in range(len(face_names))}
-    known |= {f"{_FACE_PREFIX}{i}{_OFFSETS}" for i in range(len(face_names)) if f"{_FACE_PREFIX}{i}{_OFFSETS}" in arrays}
+    known = _entry_names(len(vertex_names), len(face_names)) | {_BYTES_PREFIX + k for k in blobs}
     unknown = sorted(set(arrays) - known)
     if unknown:
         raise ValueError(f"scan arrays: unexpected entries {unknown}")

@@ -59,8 +59,7 @@ def _undeclared_wide_integers(path: str, rows: np.ndarray, names: list, declared
             and np.all(rows[:, i] == np.round(rows[:, i])) and np.abs(rows[:, i]).max() >= 2.0 ** 53]
     if not wide:
         return {}
-    with open_text(path, "a text file") as f:
-        texts = np.loadtxt(f, dtype=str, comments="#", skiprows=skip, usecols=wide, ndmin=2)
+    texts = _text_columns(path, wide, skip)
     out = {}
     for j, i in enumerate(wide):
         try:
@@ -233,10 +232,15 @@ def _wide_integer_columns(path: str, names: list, dtypes: list) -> dict:
     wide = [i for i, d in enumerate(dtypes) if np.dtype(d).kind in "iu" and np.dtype(d).itemsize > 4]
     if not wide:
         return {}
-    with open_text(path, "a text file") as f:
-        texts = np.loadtxt(f, dtype=str, comments="#", skiprows=1, usecols=wide, ndmin=2)
+    texts = _text_columns(path, wide, skip=1)
     return {i: _exact_integers(texts[:, j], np.dtype(dtypes[i]), f"column {names[i]}", path)
             for j, i in enumerate(wide)}
+
+
+def _text_columns(path: str, columns: list, skip: int) -> np.ndarray:
+    """The rows' values in `columns` as the text the file holds, past `skip` header lines."""
+    with open_text(path, "a text file") as f:
+        return np.loadtxt(f, dtype=str, comments="#", skiprows=skip, usecols=columns, ndmin=2)
 
 
 def _exact_integers(texts: np.ndarray, dtype: np.dtype, what: str, path: str) -> np.ndarray:
