@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <new>
@@ -317,6 +318,68 @@ class ZeroedArray {
   T* data_;
 };
 
+// Which slots are on a list being built, so that each goes on it once; marked by any number of
+// threads at once. A list is built from the neighbourhoods of the slots before it, which on a
+// large model reach a hundred thousand slots in a round, so every thread builds a share.
+class SlotMarks {
+ public:
+  explicit SlotMarks(std::size_t n) : taken_(n) {}  // all clear
+  // Marks slot s, and says whether this call marked it (false: it already was).
+  bool claim(Index s) {
+    std::atomic<std::uint8_t>& t = taken_[static_cast<std::size_t>(s)];
+    return t.load(std::memory_order_relaxed) == 0 && t.exchange(1, std::memory_order_relaxed) == 0;
+  }
+  bool taken(Index s) const { return taken_[static_cast<std::size_t>(s)].load(std::memory_order_relaxed) != 0; }
+  // Clears the marks of the slots listed (the list that was built).
+  void clear(const IndexList& list) {
+    parallel_for(list.size(), [&](std::size_t b, std::size_t e) {
+      for (std::size_t t = b; t < e; ++t) taken_[static_cast<std::size_t>(list[t])].store(0, std::memory_order_relaxed);
+    }, {}, 16384);
+  }
+
+ private:
+  std::vector<std::atomic<std::uint8_t>> taken_;
+};
+
+// Calls visit(chunk's list, slot) for the slots from[begin..) on any number of threads, then
+// appends the chunks' lists to into in chunk order (into may be from: it grows after the reading).
+template <class Visit>
+void append_in_parallel(const IndexList& from, std::size_t begin, IndexList& into, Visit&& visit) {
+  constexpr std::size_t chunk = 1024;
+  const std::size_t count = from.size() - begin;
+  std::vector<IndexList> found((count + chunk - 1) / chunk);
+  parallel_for(count, [&](std::size_t b, std::size_t e) {
+    IndexList& out = found[b / chunk];
+    for (std::size_t t = b; t < e; ++t) visit(out, from[begin + t]);
+  }, {}, chunk);
+  for (const IndexList& f : found) into.insert(into.end(), f.begin(), f.end());
+}
+
+// Appends to list the neighbours of list[begin..) not marked yet, marking them.
+template <class EachNeighbour>
+void claim_neighbours(IndexList& list, std::size_t begin, SlotMarks& marks, EachNeighbour&& each_neighbour) {
+  append_in_parallel(list, begin, list, [&](IndexList& out, Index s) {
+    each_neighbour(s, [&](Index q) {
+      if (marks.claim(q)) out.push_back(q);
+    });
+  });
+}
+
+// The slots whose folds may have changed: those of `dirty` that moved, and the slots whose rings hold
+// one (no other slot's ring moved), into check (empty, marks clear), marked.
+void claim_moved(const IndexList& dirty, const ZeroedArray<std::uint8_t>& moved, SlotMarks& marks,
+                 const FoldReference& ref, IndexList& check) {
+  append_in_parallel(dirty, 0, check, [&](IndexList& out, Index s) {
+    const std::size_t us = static_cast<std::size_t>(s);
+    if (!moved[us]) return;
+    if (marks.claim(s)) out.push_back(s);
+    for (Index k = ref.in_offsets[us]; k < ref.in_offsets[us + 1]; ++k) {
+      const Index q = ref.in_rings[static_cast<std::size_t>(k)];
+      if (marks.claim(q)) out.push_back(q);
+    }
+  });
+}
+
 // The round of folding (its strength rising each time) in which a point's ring first takes its strength too.
 constexpr int stubborn_rounds = 10;
 
@@ -359,19 +422,8 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
   std::vector<ZeroedArray<double>> layer;
   for (int k = 0; k <= passes; ++k) layer.emplace_back(n);
   ZeroedArray<double>& strength = layer.front();
-  ZeroedArray<int> stamp(n);  // the list-building step that last took each slot (steps count from 1)
-  int step_id = 0;
-  // A new list-building step into `list`: the returned function adds a slot once per step.
-  auto start_list = [&](IndexList& list) {
-    ++step_id;
-    list.clear();
-    return [&stamp, &step_id, &list](Index j) {
-      if (stamp[static_cast<std::size_t>(j)] == step_id) return;
-      stamp[static_cast<std::size_t>(j)] = step_id;
-      list.push_back(j);
-    };
-  };
-  IndexList dirty, grown, check, folds;  // slots
+  SlotMarks marks(n);  // the slots on the list being built (cleared when it is done)
+  IndexList dirty, check, folds;  // slots
   ZeroedArray<std::uint8_t> moved(n);
   for (std::size_t i = 0; i < n; ++i)
     if (out.before[i] != fold_none) folds.push_back(ref.slot[i]);
@@ -397,36 +449,36 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
     // Each layer again where the one below changed, and one ring step around it: the largest
     // (widening) or the mean (averaging) of each point and its neighbours, the mean adding up
     // in the neighbours' order, so that it is the same sum wherever it is recomputed.
-    {
-      const auto add = start_list(dirty);  // each slot once: with smoothing 0 dirty is written to as it is
-      for (Index f : folds) add(f);
-      for (Index f : folds) {
-        const double w = strength[static_cast<std::size_t>(f)];
-        if (w < stubborn) continue;
-        const Index* ring = ref.rings.data() + static_cast<std::size_t>(f) * width;
-        for (std::size_t m = 1; m < width; ++m) {
-          const Index j = ring[m];
-          double& wj = strength[static_cast<std::size_t>(j)];
-          if (wj < w) { wj = w; add(j); }
+    dirty.clear();  // each slot once: with smoothing 0 dirty is written to as it is
+    for (Index f : folds)
+      if (marks.claim(f)) dirty.push_back(f);
+    for (Index f : folds) {
+      const double w = strength[static_cast<std::size_t>(f)];
+      if (w < stubborn) continue;
+      const Index* ring = ref.rings.data() + static_cast<std::size_t>(f) * width;
+      for (std::size_t m = 1; m < width; ++m) {
+        const Index j = ring[m];
+        double& wj = strength[static_cast<std::size_t>(j)];
+        if (wj < w) {
+          wj = w;
+          if (marks.claim(j)) dirty.push_back(j);
         }
       }
     }
-    // A layer changes where the one below changed (dirty) and at their neighbours. The
-    // neighbours of the slots a pass took beyond its own dirty ones (its frontier) are all the
-    // next pass must add: the others' neighbours it already took.
+    // A layer changes where the one below changed and at their neighbours: each pass adds to
+    // dirty the neighbours of the slots the pass before added (its frontier), the others'
+    // neighbours being on it already.
     std::size_t frontier = 0;  // where the frontier starts in dirty: all of it on the first pass
     for (int k = 1; k <= passes; ++k) {
       const bool largest = k <= options.smoothing;
-      const auto take = start_list(grown);
-      for (Index i : dirty) take(i);
-      const std::size_t taken = grown.size();
-      for (std::size_t t = frontier; t < dirty.size(); ++t) each_neighbour(dirty[t], take);
+      const std::size_t taken = dirty.size();
+      claim_neighbours(dirty, frontier, marks, each_neighbour);
       frontier = taken;
       const ZeroedArray<double>& below = layer[static_cast<std::size_t>(k - 1)];
       ZeroedArray<double>& into = layer[static_cast<std::size_t>(k)];
-      parallel_for(grown.size(), [&](std::size_t b, std::size_t e) {
+      parallel_for(dirty.size(), [&](std::size_t b, std::size_t e) {
         for (std::size_t t = b; t < e; ++t) {
-          const Index j = grown[t];
+          const Index j = dirty[t];
           double v = below[static_cast<std::size_t>(j)];
           int count = 1;
           each_neighbour(j, [&](Index q) {
@@ -437,8 +489,8 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
           into[static_cast<std::size_t>(j)] = largest ? v : v / count;
         }
       }, {}, 512);
-      dirty.swap(grown);
     }
+    marks.clear(dirty);
     // The points whose limiter may have changed, from their reconstructed rows (the result
     // keeps them until the end).
     const ZeroedArray<double>& field = layer.back();
@@ -456,21 +508,17 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
     }, {}, 4096);
     // Test again every point that moved or whose ring holds one that moved: no other point's
     // folds can have changed.
-    const auto take = start_list(check);
-    for (Index s : dirty) {
-      const std::size_t us = static_cast<std::size_t>(s);
-      if (!moved[us]) continue;
-      take(s);
-      for (Index k = ref.in_offsets[us]; k < ref.in_offsets[us + 1]; ++k) take(ref.in_rings[static_cast<std::size_t>(k)]);
-    }
+    check.clear();
+    claim_moved(dirty, moved, marks, ref, check);
     folds_at(ref, e_rows, r, check, out.after);
     // Folds left: among the tested points, and the folds of this round that were not tested
     // (their limiter and their rings did not move: one stronger fold beside them sets it).
     for (Index f : folds)
-      if (stamp[static_cast<std::size_t>(f)] != step_id) check.push_back(f);
+      if (!marks.taken(f)) check.push_back(f);
     folds.clear();
     for (Index s : check)
       if (out.after[static_cast<std::size_t>(ref.order[static_cast<std::size_t>(s)])] != fold_none) folds.push_back(s);
+    marks.clear(check);
   }
   // Back to point order: the limited rows (the others are as reconstructed), and the limiter.
   out.limiter.resize(n);
