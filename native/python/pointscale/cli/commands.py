@@ -12,7 +12,7 @@ from ..folds import with_folds
 from ..multiscale import _base_array
 from .folder import DECOMPOSITION_FILE, SOURCE_FILE, level_name, read_decomposition
 from .level_files import finest_normals, level_scan, reconstruct_with_normals
-from .output_checks import check_format_holds, check_output_file, check_output_folder, read_base, writable_extension
+from .output_checks import check_format_holds, check_input_kept, check_output_file, check_output_folder, read_base, writable_extension
 from .progress import CommandProgress
 from .staged_output import StagedOutput
 
@@ -121,6 +121,7 @@ def cmd_decompose(args) -> None:
         extension = writable_extension("level" + "." * (not args.format.startswith(".")) + args.format, "--format")
     else:
         extension = writable_extension(args.input, "input")
+    check_input_kept(Path(args.input), out)  # first: --force would not help
     earlier = check_output_folder(out, args.force)
     stages = {"reading": 1.0, "decomposing": 5.0, "levels": 0.6, "writing": 1.6}
     with CommandProgress(stages) as progress, StagedOutput() as staged:

@@ -32,12 +32,12 @@ def owned_files(folder: Path) -> list[Path]:
     """The files of an earlier decomposition in `folder`: what decomposing again replaces."""
     if not folder.is_dir():
         return []
-    names = [p for p in folder.iterdir() if p.is_file() and _is_level_file(p.name)]
+    names = [p for p in folder.iterdir() if p.is_file() and is_level_file(p.name)]
     names += [folder / n for n in (DECOMPOSITION_FILE, SOURCE_FILE, "faces.npy") if (folder / n).is_file()]
     return sorted(names)
 
 
-def _is_level_file(name: str) -> bool:
+def is_level_file(name: str) -> bool:
     match = _LEVEL_FILE.match(name)
     return match is not None and match.group(2) in io.SUPPORTED_EXTENSIONS
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import io
-from .folder import owned_files
+from .folder import is_level_file, owned_files
 from .level_files import level_scan
 
 
@@ -48,6 +48,28 @@ def check_output_folder(out: Path, force: bool) -> list[Path]:
         raise ValueError(f"{out} already holds a decomposition ({len(earlier)} files, e.g. {earlier[0].name}); "
                          "pass --force to replace it, or choose another folder")
     return earlier
+
+
+def check_input_kept(source: Path, out: Path) -> None:
+    """Refuses, --force or not, to decompose a file that the run would overwrite or remove: a
+    level file of `out` (level_0.ply of an earlier run, taken as a new input) or one of its
+    earlier decomposition's files. The scan would be lost once the new files are in place."""
+    try:
+        source_real = source.resolve(strict=True)
+    except OSError:
+        return  # a missing input is io.read's to report
+    inside = source_real.parent == out.resolve()
+    replaced = any(_same_file(source_real, p) for p in owned_files(out))
+    if replaced or (inside and is_level_file(source_real.name)):
+        raise ValueError(f"the input {source} is one of the files decompose writes or replaces in {out}, and would be "
+                         "lost; copy it out of that folder first, or choose another -o")
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.samefile(b)
+    except OSError:
+        return False
 
 
 def check_output_file(out: Path, force: bool) -> None:
