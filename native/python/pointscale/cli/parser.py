@@ -50,6 +50,21 @@ def path_given(text: str) -> str:
     return text
 
 
+DEMO_POINTS = (1000, 10_000_000)  # its 4 levels need 512 points; beyond 10M it is no longer a demo
+
+
+def demo_points(text: str) -> int:
+    """--points of the demo: a whole number in DEMO_POINTS."""
+    lo, hi = DEMO_POINTS
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number from {lo} to {hi}, got {text!r}") from None
+    if not lo <= value <= hi:
+        raise argparse.ArgumentTypeError(f"must be from {lo} to {hi}, got {value}")
+    return value
+
+
 def build_parser(formats: str) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="pointscale", formatter_class=_Formatter, allow_abbrev=False,
@@ -121,5 +136,6 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
     m = sub.add_parser("demo", formatter_class=_Formatter, allow_abbrev=False,
                        help="run the whole pipeline on procedural shapes (no download)")
     m.add_argument("-o", "--output", type=path_given, default="pointscale-demo", help="output folder")
-    m.add_argument("--points", type=int, default=100000, help="points of the demo sphere")
+    m.add_argument("--points", type=demo_points, default=100000,
+                   help=f"points of the demo sphere, {DEMO_POINTS[0]} to {DEMO_POINTS[1]}")
     return parser
