@@ -8,7 +8,7 @@ import numpy as np
 
 from . import _core
 from ._checks import (MAX_GAIN, MIN_COARSE_POINTS, as_array, as_callback, as_points, centre, finite_result,
-                      mls_options, number, thread_option)
+                      mls_options, number, require_surface, thread_option)
 
 #: Below this overlap of A's and B's bounding boxes (intersection over union) morph warns:
 #: the base lies far from one of them, and beta = 1 would land away from B.
@@ -54,7 +54,8 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_sam
           threads: int = 0, progress=None, faces_a=None, edges_a=None, faces_b=None, edges_b=None) -> Morph:
     """Morph between two models through a common base surface (Sec. 8.3, Eq. 22).
 
-    points_a, points_b  (n_a, 3), (n_b, 3); the counts may differ. They must overlap: a warning
+    points_a, points_b  (n_a, 3), (n_b, 3); the counts may differ, each at least 8 points that
+                        span a surface (not all on a line). They must overlap: a warning
                         says when their bounding boxes share less than OVERLAP_WARNING.
     base_points         samples of a base close to both, e.g. ellipsoid_base(points_a, points_b);
                         None takes that ellipsoid (of A and the aligned B), base_samples points
@@ -77,7 +78,11 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_sam
     from .alignment import METHODS, overlap, similarity
     if align not in METHODS:
         raise ValueError(f"align must be one of {', '.join(METHODS)}, got {align!r}")
-    a, b = as_points(points_a, "points_a"), as_points(points_b, "points_b")
+    # A model of a few points, or of points on a line, has no shape to morph to or from.
+    a = as_points(points_a, "points_a", min_count=MIN_COARSE_POINTS)
+    b = as_points(points_b, "points_b", min_count=MIN_COARSE_POINTS)
+    require_surface(a, "points_a", allow_planar=True)
+    require_surface(b, "points_b", allow_planar=True)
     threads = thread_option(threads)
     placement = None
     if align != "none":
