@@ -7,6 +7,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <mutex>
 
 #include "pointscale/cluster_decimation.h"
@@ -384,7 +385,8 @@ PYBIND11_MODULE(_core, m) {
     Points p = to_points(points);
     if (!orient) check_normal_estimation(p, neighbors);  // oriented_normals checks its own
     return without_gil(threads, [&] {
-      if (orient) return oriented_normals(std::move(p), neighbors, orientation_width);
+      // Fewer fit neighbours than the graph's width: the graph joins all of them (its width is at most k).
+      if (orient) return oriented_normals(std::move(p), neighbors, std::min(neighbors, orientation_width));
       return pca_normals(SpatialIndex(std::move(p)), neighbors);
     });
   }, py::arg("points"), py::arg("neighbors"), py::arg("orient"), py::arg("threads") = 0);

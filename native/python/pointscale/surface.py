@@ -101,7 +101,8 @@ def decimate(points, target: int, *, max_variation: float = 0.05):
 
 def estimate_normals(points, neighbors: int = 16, *, orient: bool = True, threads: int = 0) -> np.ndarray:
     """Unit PCA normals of each point's neighbourhood, consistently oriented (outward on closed
-    shapes) by spanning-tree propagation when orient is True. Returns (n, 3)."""
+    shapes) by spanning-tree propagation when orient is True. The propagation follows each
+    point's 12 nearest neighbours, or all `neighbors` of its fit when there are fewer. Returns (n, 3)."""
     neighbors = number(neighbors, "neighbors", integer=True)
     p = as_points(points)  # the core checks the neighbours, the count and the surface
     normals = _core.estimate_normals(p - centre(p), neighbors=neighbors, orient=bool(orient),
