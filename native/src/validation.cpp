@@ -127,7 +127,12 @@ void check_surface(const PointsRef& points, const char* name, bool allow_planar)
   const Vec3 spread = scaled_spread(points);  // judged by shape, whatever the size
   if (spread[0] == 0.0) fail(format("all %s are identical: they define no surface", name));
   // Rounding leaves eigenvalues near 1e-16 of the largest, so spreads below 1e-6 count as zero.
-  if (spread[1] <= 1e-6 * spread[0]) fail(format("%s are collinear: they define no surface and no normals", name));
+  // Parts far apart or a stray point far away look the same to this test: say so, since such
+  // a set is not a line to the eye.
+  if (spread[1] <= 1e-6 * spread[0])
+    fail(format("%s are collinear, or nearly so: across their longest axis they spread less than 1e-6 as far as "
+                "along it, so they define no surface and no normals. A few points far from the rest (outliers), "
+                "or parts far apart, do this too: remove the outliers, or process the parts apart", name));
   if (!allow_planar && spread[2] <= 1e-6 * spread[0])
     fail(format("%s all lie in one plane: there is no detail to separate from a base "
                 "(use project() to work with planar data)", name));
