@@ -7,6 +7,7 @@ import math
 import os
 import warnings
 from collections.abc import Mapping
+from pathlib import Path
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -166,11 +167,22 @@ class Decomposition:
         return cls(model, origin, settings, _stats=_checked_stats(arrays, model.bands), _mirror=symmetry)
 
     def save(self, path) -> None:
-        """Writes one .npz file."""
-        path = os.fspath(path)
-        tmp = path + ".part.npz"
-        np.savez_compressed(tmp, **self.to_dict())
-        os.replace(tmp, path)  # never leave a half-written file under the real name
+        """Writes one .npz file at `path`, whole or not at all: an earlier file there stays until
+        the new one is complete. Raises ValueError when `path` is a folder or its folder is missing."""
+        from .io.atomic import atomic_write
+        path = Path(os.fspath(path))
+        if path.is_dir():
+            raise ValueError(f"cannot save the decomposition to {path}: it is a folder; name a file, "
+                             f"e.g. {path / 'decomposition.npz'}")
+        folder = path.absolute().parent
+        if not folder.is_dir():
+            raise ValueError(f"cannot save the decomposition to {path}: the folder {folder} does not exist")
+        arrays = self.to_dict()
+        try:
+            with atomic_write(path) as tmp, open(tmp, "wb") as f:  # a file object: savez adds no .npz
+                np.savez_compressed(f, **arrays)
+        except OSError as exc:
+            raise ValueError(f"cannot save the decomposition to {path}: {exc.strerror or exc}") from None
 
 
 def load(path) -> Decomposition:
