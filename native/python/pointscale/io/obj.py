@@ -153,10 +153,15 @@ def _faces(face_lines: list, nv: int, nvt: int, nvn: int, path: str):
             columns.append(None)
             continue
         # OBJ indices are 1-based; negative ones count back from the end.
-        column = np.where(column < 0, column + count, column - 1)
-        if column.size and (column.min() < 0 or column.max() >= count):
+        written = column
+        column = np.where(written < 0, written + count, written - 1)
+        bad = (column < 0) | (column >= count)
+        if bad.any():  # name the index as the file writes it, the first one out of range
             what = ("vertex", "texture coordinate", "normal")[j]
-            raise ValueError(f"{path}: a face refers to {what} {int(column.max()) + 1}, outside 1..{count}")
+            first = int(written[np.argmax(bad)])
+            allowed = (f"outside 1..{count} (or -{count}..-1, counted back from the end)" if count
+                       else f"but the file has no {what}s")
+            raise ValueError(f"{path}: a face refers to {what} {first}, {allowed}")
         columns.append(column)
     columns += [None] * (3 - len(columns))
     return polygons(lengths, columns[0]), columns[1], columns[2]
