@@ -5,6 +5,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -259,6 +260,15 @@ Mat3 ring_rotation(const Points& original, const Points& edited, const Index* ri
 
 }  // namespace
 
+namespace {
+
+// Rounding of the base's coordinates, well below any edit an artist makes.
+double edit_tolerance(const Points& original) {
+  return original.rows() > 0 ? 1e-12 * (original.colwise().maxCoeff() - original.colwise().minCoeff()).norm() : 0.0;
+}
+
+}  // namespace
+
 EditRingPlanes ring_planes(const Points& original, const IndexList& rings, int ring_size) {
   check_ring_size(ring_size);
   const std::size_t n = static_cast<std::size_t>(original.rows());
@@ -287,13 +297,13 @@ std::vector<Mat3> edit_rotations(const Points& original, const Points& edited, c
 
 void edit_rotations(const Points& original, const Points& edited, const IndexList& rings, int ring_size,
                     const std::vector<Mat3>& cluster_rotation, const IndexList& labels, const EditRingPlanes* planes,
-                    std::vector<Mat3>& rotation, EditRotationReport* report) {
+                    std::vector<Mat3>& rotation, EditRotationReport* report, std::vector<unsigned char>* kinds) {
   check_ring_size(ring_size);
   const std::size_t n = static_cast<std::size_t>(original.rows());
   rotation.resize(n);
+  if (kinds) kinds->resize(n);
   std::atomic<std::size_t> counts[4] = {{0}, {0}, {0}, {0}};
-  // Rounding of the base's coordinates, well below any edit an artist makes.
-  const double tolerance = n > 0 ? 1e-12 * (original.colwise().maxCoeff() - original.colwise().minCoeff()).norm() : 0.0;
+  const double tolerance = edit_tolerance(original);
   EditRingPlanes found;
   if (!planes) {
     found = ring_planes(original, rings, ring_size);
@@ -306,6 +316,7 @@ void edit_rotations(const Points& original, const Points& edited, const IndexLis
       rotation[i] = ring_rotation(original, edited, rings.data() + i * static_cast<std::size_t>(ring_size), ring_size,
                                   cluster_rotation[static_cast<std::size_t>(labels[i])], tolerance, *planes, i, kind);
       ++local[static_cast<int>(kind)];
+      if (kinds) (*kinds)[i] = static_cast<unsigned char>(kind);
     }
     for (int t = 0; t < 4; ++t) counts[t] += local[t];
   }, {}, 1024);
@@ -315,6 +326,41 @@ void edit_rotations(const Points& original, const Points& edited, const IndexLis
     report->curved = counts[2];
     report->on_a_line = counts[3];
   }
+}
+
+void edit_rotations_of(const IndexList& which, const Points& original, const Points& edited, const IndexList& rings,
+                       int ring_size, const std::vector<Mat3>& cluster_rotation, const IndexList& labels,
+                       const EditRingPlanes& planes, std::vector<Mat3>& rotation, std::vector<unsigned char>& kinds,
+                       std::vector<unsigned char>& turned_again) {
+  check_ring_size(ring_size);
+  const std::size_t n = static_cast<std::size_t>(original.rows());
+  if (rotation.size() != n || kinds.size() != n || turned_again.size() != n)
+    throw std::invalid_argument("edit_rotations_of needs rotation, kinds and turned_again sized #P");
+  const double tolerance = edit_tolerance(original);
+  parallel_for(which.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t) {
+      const std::size_t i = static_cast<std::size_t>(which[t]);
+      RingKind kind;
+      const Mat3 turn = ring_rotation(original, edited, rings.data() + i * static_cast<std::size_t>(ring_size), ring_size,
+                                      cluster_rotation[static_cast<std::size_t>(labels[i])], tolerance, planes, i, kind);
+      if (std::memcmp(turn.data(), rotation[i].data(), sizeof(Mat3)) != 0) {
+        rotation[i] = turn;
+        turned_again[i] = 1;
+      }
+      kinds[i] = static_cast<unsigned char>(kind);
+    }
+  }, {}, 1024);
+}
+
+EditRotationReport count_ring_kinds(const std::vector<unsigned char>& kinds) {
+  std::size_t counts[4] = {0, 0, 0, 0};
+  for (unsigned char k : kinds) ++counts[k & 3];
+  EditRotationReport report;
+  report.unchanged = counts[0];
+  report.planar = counts[1];
+  report.curved = counts[2];
+  report.on_a_line = counts[3];
+  return report;
 }
 
 }  // namespace pointscale

@@ -1,6 +1,8 @@
 #include "pointscale/reconstruction.h"
 #include "pointscale/validation.h"
 
+#include <atomic>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -22,6 +24,21 @@ struct HangFromFoot {
   Vec3 shift;  // what hanging it from its foot rigidly would add
 };
 
+// What hanging point i from its foot f rigidly would add to it (HangFromFoot), or false where
+// it stands on its own base position or nothing moved there.
+inline bool foot_shift(Eigen::Index i, Index f, const Points& original, const Points& edited, const Mat3& turn,
+                       HangFromFoot& hang) {
+  if (f == static_cast<Index>(i)) return false;
+  const Vec3 base = original.row(i).transpose(), base_edited = edited.row(i).transpose();
+  const Vec3 foot = original.row(f).transpose(), foot_edited = edited.row(f).transpose();
+  const Vec3 span = base - foot;
+  const Vec3 shift = (foot_edited - foot) - (base_edited - base) + (turn * span - span);
+  // Nothing moved here: the identity, exactly, so a local edit leaves the rest as it was.
+  if (shift.x() == 0.0 && shift.y() == 0.0 && shift.z() == 0.0) return false;
+  hang = {i, base_edited, shift};
+  return true;
+}
+
 std::vector<HangFromFoot> hang_from_feet(const Points& original, const Points& edited, const IndexList& feet,
                                          const std::vector<Mat3>& rotation) {
   constexpr std::size_t chunk = 16384;
@@ -30,16 +47,9 @@ std::vector<HangFromFoot> hang_from_feet(const Points& original, const Points& e
     std::vector<HangFromFoot>& out = found[b / chunk];
     for (std::size_t ii = b; ii < e; ++ii) {
       const Index f = feet[ii];
-      if (f == static_cast<Index>(ii)) continue;
-      const Eigen::Index i = static_cast<Eigen::Index>(ii);
-      const Vec3 base = original.row(i).transpose(), base_edited = edited.row(i).transpose();
-      const Vec3 foot = original.row(f).transpose(), foot_edited = edited.row(f).transpose();
-      const Mat3& turn = rotation[static_cast<std::size_t>(f)];
-      const Vec3 span = base - foot;
-      const Vec3 shift = (foot_edited - foot) - (base_edited - base) + (turn * span - span);
-      // Nothing moved here: the identity, exactly, so a local edit leaves the rest as it was.
-      if (shift.x() == 0.0 && shift.y() == 0.0 && shift.z() == 0.0) continue;
-      out.push_back({i, base_edited, shift});
+      HangFromFoot hang;
+      if (foot_shift(static_cast<Eigen::Index>(ii), f, original, edited, rotation[static_cast<std::size_t>(f)], hang))
+        out.push_back(hang);
     }
   }, {}, chunk);
   std::vector<HangFromFoot> all;
@@ -47,27 +57,110 @@ std::vector<HangFromFoot> hang_from_feet(const Points& original, const Points& e
   return all;
 }
 
+// Turns the point's offset from its base position towards where hanging it from its foot puts
+// it, keeping its length, and every kept level and normal of it by the same turn.
+inline void turn_towards_foot(const HangFromFoot& h, Points& p, Reconstruction* kept) {
+  const Vec3 w = p.row(h.point).transpose() - h.base;
+  const Vec3 v = w + h.shift;
+  if (!(w.norm() > 0.0) || !(v.norm() > 0.0)) return;
+  const Mat3 q = Eigen::Quaterniond::FromTwoVectors(w, v).toRotationMatrix();
+  p.row(h.point) = (h.base + q * w).transpose();
+  if (!kept) return;
+  for (std::size_t l = 1; l < kept->levels.size(); ++l) {
+    Points& level = kept->levels[l];
+    level.row(h.point) = (h.base + q * (level.row(h.point).transpose() - h.base)).transpose();
+  }
+  for (Points& n : kept->normals) n.row(h.point) = (q * n.row(h.point).transpose()).transpose();
+}
+
 // Turns each listed point's offset from its base position towards where hanging it from its
-// foot puts it, keeping its length, and every kept level and normal of it by the same turn.
-// A steep edit stretches the base along its slope, and the base positions of a tall feature's
-// top lie away from its foot: offsets hung from those positions would lean with the stretch.
+// foot puts it (turn_towards_foot). A steep edit stretches the base along its slope, and the
+// base positions of a tall feature's top lie away from its foot: offsets hung from those
+// positions would lean with the stretch.
 void turn_towards_feet(const std::vector<HangFromFoot>& hang, Points& p, Reconstruction* kept) {
   parallel_for(hang.size(), [&](std::size_t b, std::size_t e) {
+    for (std::size_t j = b; j < e; ++j) turn_towards_foot(hang[j], p, kept);
+  }, {}, 4096);
+}
+
+// Adds band l to point i along its level normal turned by the edit at its foot.
+inline void add_turned_band(Eigen::Index i, double offset, const Mat3& turn, const Points& nrm, Points& p) {
+  const Eigen::RowVector3d n = (turn * nrm.row(i).transpose()).transpose();
+  p.row(i) += offset * n;
+}
+
+bool same_bits(const Mat3& a, const Mat3& b) { return std::memcmp(a.data(), b.data(), sizeof(Mat3)) == 0; }
+
+// An editing session's edited call with the gains of its last one (whose level normals it
+// reads) and a base that changed at few points since then: only what those changes reach is
+// done again, and the rest is the last result, so the points are bit for bit what the whole
+// pass gives. A ring is measured again where one of its points moved or its level-0 cluster
+// turned otherwise; a point is rebuilt where it, its foot, or its foot's turn changed (nothing
+// else enters its bands or its hang). Returns false, having changed nothing, where more than a
+// quarter of the base moved: the whole pass is then as quick.
+bool rebuild_since_last_edit(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p,
+                             const std::vector<Mat3>& clusters, const std::vector<const Points*>& normals,
+                             ReconstructionWorkspace& ws, EditRotationReport& report) {
+  LastEdit& last = ws.last;
+  const Eigen::Index n = p.rows();
+  const std::size_t count = static_cast<std::size_t>(n);
+  std::vector<unsigned char> moved(count, 0);
+  std::atomic<std::size_t> how_many{0};
+  parallel_for(count, [&](std::size_t b, std::size_t e) {
+    std::size_t local = 0;
+    for (std::size_t i = b; i < e; ++i) {
+      const Eigen::Index r = static_cast<Eigen::Index>(i);
+      const double a[3] = {p(r, 0), p(r, 1), p(r, 2)}, was[3] = {last.base(r, 0), last.base(r, 1), last.base(r, 2)};
+      if (std::memcmp(a, was, sizeof a) != 0) { moved[i] = 1; ++local; }
+    }
+    how_many += local;
+  }, {}, 16384);
+  if (how_many.load() > count / 4) return false;
+  const EditSupport& edit = *ws.edit;
+  const IndexList& labels = model.support[0].labels;
+  std::vector<unsigned char> cluster_turned(clusters.size(), 0);
+  for (std::size_t c = 0; c < clusters.size(); ++c) cluster_turned[c] = !same_bits(clusters[c], last.clusters[c]);
+  // The rings to measure again.
+  const std::size_t ring = static_cast<std::size_t>(edit.ring_size);
+  constexpr std::size_t chunk = 16384;
+  std::vector<IndexList> found((count + chunk - 1) / chunk);
+  parallel_for(count, [&](std::size_t b, std::size_t e) {
+    IndexList& out = found[b / chunk];
     for (std::size_t j = b; j < e; ++j) {
-      const HangFromFoot& h = hang[j];
-      const Vec3 w = p.row(h.point).transpose() - h.base;
-      const Vec3 v = w + h.shift;
-      if (!(w.norm() > 0.0) || !(v.norm() > 0.0)) continue;
-      const Mat3 q = Eigen::Quaterniond::FromTwoVectors(w, v).toRotationMatrix();
-      p.row(h.point) = (h.base + q * w).transpose();
-      if (!kept) continue;
-      for (std::size_t l = 1; l < kept->levels.size(); ++l) {
-        Points& level = kept->levels[l];
-        level.row(h.point) = (h.base + q * (level.row(h.point).transpose() - h.base)).transpose();
+      bool dirty = cluster_turned[static_cast<std::size_t>(labels[j])] != 0;
+      const Index* r = edit.rings.data() + j * ring;
+      for (std::size_t m = 0; m < ring && !dirty; ++m) dirty = moved[static_cast<std::size_t>(r[m])] != 0;
+      if (dirty) out.push_back(static_cast<Index>(j));
+    }
+  }, {}, chunk);
+  IndexList which;
+  for (IndexList& part : found) which.insert(which.end(), part.begin(), part.end());
+  std::vector<unsigned char> turned_again(count, 0);
+  edit_rotations_of(which, model.base, p, edit.rings, edit.ring_size, clusters, labels, edit.planes, ws.rotation,
+                    last.kinds, turned_again);
+  // The points to rebuild, from the edited base (its copy: p receives results as it goes).
+  const Points edited = p;
+  const int k = model.bands();
+  const bool per_point = gains.cols() > 1;
+  parallel_for(count, [&](std::size_t b, std::size_t e) {
+    for (std::size_t ii = b; ii < e; ++ii) {
+      const Eigen::Index i = static_cast<Eigen::Index>(ii);
+      const std::size_t f = static_cast<std::size_t>(edit.feet[ii]);
+      if (!moved[ii] && !moved[f] && !turned_again[f]) {
+        p.row(i) = last.result.row(i);
+        continue;
       }
-      for (Points& n : kept->normals) n.row(h.point) = (q * n.row(h.point).transpose()).transpose();
+      const Mat3& turn = ws.rotation[f];
+      for (int l = 0; l < k; ++l) {
+        const double g = per_point ? gains(l, i) : gains(l, 0);
+        add_turned_band(i, g * model.details(l, i), turn, *normals[static_cast<std::size_t>(l)], p);
+      }
+      HangFromFoot hang;
+      if (foot_shift(i, static_cast<Index>(f), model.base, edited, turn, hang)) turn_towards_foot(hang, p, nullptr);
     }
   }, {}, 4096);
+  report = count_ring_kinds(last.kinds);
+  return true;
 }
 
 }  // namespace
@@ -84,16 +177,8 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   // edited ones. Their normals, turned, are the edited levels' normals; with nothing edited
   // every turn is exactly the identity and the result is bit for bit the unedited one.
   const bool turned = edited && upto > 0;
-  if (turned) {
-    const std::vector<Mat3> clusters = transported_rotations(model.base, p, model.support[0]);
-    edit_rotations(model.base, p, ws.edit->rings, ws.edit->ring_size, clusters, model.support[0].labels,
-                   &ws.edit->planes, ws.rotation, &report);
-  }
-  // Points whose detail stands on a foot other than their own base position: how far the edit
-  // moves the foot, less how far it moves their own base position, less the turn of the span
-  // between the two. Hanging the point from its foot rigidly would add exactly that.
-  std::vector<HangFromFoot> hang;
-  if (turned) hang = hang_from_feet(model.base, p, ws.edit->feet, ws.rotation);
+  std::vector<Mat3> clusters;
+  if (turned) clusters = transported_rotations(model.base, p, model.support[0]);
   Points& fitted = turned ? ws.unedited : p;  // the level each level's normals are fitted to
   // Normals fitted once for these gains are reused (they do not depend on the edit): kept
   // between calls by a Reconstructor, or handed over by the unedited pass before this one.
@@ -106,6 +191,47 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
                                  ws.unedited_gains.rows() == gains.rows() && ws.unedited_gains.cols() == gains.cols() &&
                                  (ws.unedited_gains.array() == gains.array()).all());
   const std::vector<Points>& cached_normals = shared ? *shared : ws.unedited_normals;
+  // An editing session remembers its last edited call (LastEdit), valid again only once this
+  // one is done: a call that fails or is cancelled on the way leaves none behind.
+  const bool remember = turned && ws.kept && !kept && upto == k;
+  const bool since_last = remember && cached && ws.last.base.rows() == p.rows() &&
+                          ws.last.gains.rows() == gains.rows() && ws.last.gains.cols() == gains.cols() &&
+                          (ws.last.gains.array() == gains.array()).all();
+  Points given;  // the edited base this call was given, to remember
+  if (remember) {
+    given = p;
+    if (since_last) {
+      std::vector<const Points*> normals(static_cast<std::size_t>(k));
+      normals[0] = &model.base_normals;
+      for (int l = 1; l < k; ++l) normals[static_cast<std::size_t>(l)] = &cached_normals[static_cast<std::size_t>(l)];
+      const ProgressStage stage = all.sub(0.0, 1.0);
+      stage.report(0.0);  // a callback may cancel here too
+      bool rebuilt = false;
+      try {
+        rebuilt = rebuild_since_last_edit(model, gains, p, clusters, normals, ws, report);
+      } catch (...) {
+        ws.last.base.resize(0, 3);  // its turns and kinds may be half updated
+        throw;
+      }
+      if (rebuilt) {
+        ws.last.base = std::move(given);
+        ws.last.result = p;
+        ws.last.clusters = std::move(clusters);
+        stage.report(1.0);
+        return report;
+      }
+    }
+    ws.last.base.resize(0, 3);
+  }
+  if (turned) {
+    edit_rotations(model.base, p, ws.edit->rings, ws.edit->ring_size, clusters, model.support[0].labels,
+                   &ws.edit->planes, ws.rotation, &report, remember ? &ws.last.kinds : nullptr);
+  }
+  // Points whose detail stands on a foot other than their own base position: how far the edit
+  // moves the foot, less how far it moves their own base position, less the turn of the span
+  // between the two. Hanging the point from its foot rigidly would add exactly that.
+  std::vector<HangFromFoot> hang;
+  if (turned) hang = hang_from_feet(model.base, p, ws.edit->feet, ws.rotation);
   if (turned && !cached) ws.unedited = model.base;
   if (cache && !cached) {
     ws.unedited_gains.resize(0, 0);  // valid again only once every level is in
@@ -141,10 +267,9 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
         const double offset = g * model.details(l, i);
         if (turned) {
           const Mat3& turn = ws.rotation[static_cast<std::size_t>(ws.edit->feet[ii])];
-          const Eigen::RowVector3d n = (turn * nrm.row(i).transpose()).transpose();
-          p.row(i) += offset * n;
+          add_turned_band(i, offset, turn, nrm, p);
           if (!cached) ws.unedited.row(i) += offset * nrm.row(i);
-          if (kept) applied.row(i) = n;
+          if (kept) applied.row(i) = (turn * nrm.row(i).transpose()).transpose();
         } else {
           p.row(i) += offset * nrm.row(i);
         }
@@ -156,6 +281,12 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   }
   if (!hang.empty()) turn_towards_feet(hang, p, kept);
   if (cache && !cached && upto == k) ws.unedited_gains = gains;
+  if (remember) {
+    ws.last.base = std::move(given);
+    ws.last.result = p;
+    ws.last.gains = gains;
+    ws.last.clusters = std::move(clusters);
+  }
   if (turned) Points().swap(ws.unedited);  // only fitting the normals needs it
   return report;
 }

@@ -81,9 +81,23 @@ std::vector<Mat3> edit_rotations(const Points& original, const Points& edited, c
                                  const EditRingPlanes* planes = nullptr, EditRotationReport* report = nullptr);
 
 // The same into `rotation`, reusing its storage (an editing session calls it over and over:
-// fresh pages cost a fault per 4 KB on first touch).
+// fresh pages cost a fault per 4 KB on first touch). kinds, when not null, receives #P ring
+// kinds (0 unchanged, 1 planar, 2 curved, 3 on a line: the report's four counts, per point).
 void edit_rotations(const Points& original, const Points& edited, const IndexList& rings, int ring_size,
                     const std::vector<Mat3>& cluster_rotation, const IndexList& labels, const EditRingPlanes* planes,
-                    std::vector<Mat3>& rotation, EditRotationReport* report = nullptr);
+                    std::vector<Mat3>& rotation, EditRotationReport* report = nullptr,
+                    std::vector<unsigned char>* kinds = nullptr);
+
+// The rotations of the listed points only, measured as edit_rotations measures them, into
+// rotation and kinds (both #P, from an earlier call on the same model): an editing session's
+// next edit measures again only the rings it moved. turned_again[j] becomes 1 where j's
+// rotation changed, bit for bit (#P, left as it was elsewhere).
+void edit_rotations_of(const IndexList& which, const Points& original, const Points& edited, const IndexList& rings,
+                       int ring_size, const std::vector<Mat3>& cluster_rotation, const IndexList& labels,
+                       const EditRingPlanes& planes, std::vector<Mat3>& rotation, std::vector<unsigned char>& kinds,
+                       std::vector<unsigned char>& turned_again);
+
+// The report's four counts from the kinds edit_rotations left.
+EditRotationReport count_ring_kinds(const std::vector<unsigned char>& kinds);
 
 }  // namespace pointscale

@@ -633,7 +633,9 @@ class Reconstructor:
     the working storage (about the decomposition's size again); its first call on an edited
     base finds what every edit needs (each base point's ring, plane and foot) and keeps it, and
     it keeps the stored base's level normals for the gains last used. So a call costs the fits
-    and little else. Results are bit for bit those of reconstruct(dec, gains, base). Calls on
+    and little else; an edited call with the gains of the edited call before it, on a base that
+    changed at fewer than a quarter of its points since then (a brush dab), redoes only what
+    those changes reach. Results are bit for bit those of reconstruct(dec, gains, base). Calls on
     one Reconstructor run one at a time; use reconstruct() for a one-off call.
     """
 

@@ -36,6 +36,17 @@ struct KeptEdit {
 // normals when with_unit_normals), then the support. Progress as two passes over the levels.
 KeptEdit find_kept_edit(const MultiscaleModel& model, const ProgressStage& progress, bool with_unit_normals);
 
+// An editing session's last edited call, so that the next one with the same gains does again
+// only what the base's changes since then reach (reconstruction.cpp). Empty (base.rows() == 0)
+// until an edited call completes. 49 bytes a point.
+struct LastEdit {
+  Points base;                       // #P by 3, the edited base it was given
+  Points result;                     // #P by 3, its finest level
+  Eigen::MatrixXd gains;             // its gains
+  std::vector<Mat3> clusters;        // #C level 0's cluster turns (transported_rotations)
+  std::vector<unsigned char> kinds;  // #P how each ring's turn was measured (edit_rotations)
+};
+
 // The working storage of the level loop. reconstruct() makes a fresh one per call; a
 // Reconstructor keeps one between calls.
 struct ReconstructionWorkspace {
@@ -53,6 +64,7 @@ struct ReconstructionWorkspace {
   // Or, at unit gains, those normals found once for the model and shared (KeptEdit): read only.
   std::shared_ptr<const std::vector<Points>> unit_normals;
   bool kept = false;  // kept between calls: the unedited normals are worth keeping
+  LastEdit last;      // kept between calls: the last edited call
 };
 
 // The level loop that reconstruct(), reconstruct_from_base() and Reconstructor run, on p (P^0 in, the finest level
