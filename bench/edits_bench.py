@@ -20,8 +20,10 @@
    the largest change of an offset's length. With --other-scans, the same on scans the issue does not name (igea,
    nefertiti, lucy, armadillo, every 5th point of the dragon), brushes at other places.
 3. reconstruct and Reconstructor at 100k points (bumpy sphere, generator order), medians of
-   15: unedited, handed its own base back, and on a base a lift moved everywhere; a fresh
-   Reconstructor's first edited call (median of 9).
+   15: unedited, and handed its own base back; then on bases that change from call to call:
+   two lifts that move the base everywhere, in turn, and 16 brush dabs 5% of the diagonal wide,
+   one after another (each call's base is the one before plus a dab); a fresh Reconstructor's
+   first edited call (median of 9).
 """
 from __future__ import annotations
 
@@ -168,7 +170,7 @@ def timings() -> None:
         return time.perf_counter() - t
     first = statistics.median(first_edited_call() for _ in range(9))
     print(f"a fresh Reconstructor's first edited call (finds the edit support; median of 9): {first * 1e3:.1f} ms")
-    for label, b in (("unedited", None), ("its own base back", base), ("a base moved everywhere", lifted)):
+    for label, b in (("unedited", None), ("its own base back", base)):
         row = []
         for f in (lambda: ps.reconstruct(dec, base=b), lambda: solver.reconstruct(base=b)):
             f()
@@ -178,7 +180,30 @@ def timings() -> None:
                 f()
                 times.append(time.perf_counter() - t0)
             row.append(statistics.median(times) * 1e3)
-        print(f"{label:24s} reconstruct {row[0]:6.1f}   Reconstructor {row[1]:6.1f}")
+        print(f"{label:40s} reconstruct {row[0]:6.1f}   Reconstructor {row[1]:6.1f}")
+    # Edited calls, each on a base that differs from the one before: a Reconstructor redoes only
+    # what changed since its last edited call, so a base handed twice would time nothing.
+    lowered = base.copy()
+    lowered[:, 2] -= 0.2 * np.exp(-((base[:, :2] + 0.3) ** 2).sum(axis=1) / 0.3)
+    everywhere = [lifted, lowered] * 8
+    normals, diag = dec.normals(0), diagonal(base)
+    rng = np.random.default_rng(0)
+    dabs, current = [], lifted
+    for _ in range(16):  # brush dabs 5% of the diagonal wide that add up, on the lifted base
+        centre = rng.integers(len(base))
+        t = np.clip(1 - np.linalg.norm(current - current[centre], axis=1) / (0.05 * diag), 0, 1)
+        current = current + (0.01 * diag) * (t * t * (3 - 2 * t))[:, None] * normals[centre]
+        dabs.append(current)
+    for label, bases in (("a base moved everywhere (two, in turn)", everywhere), ("brush dabs, one after another", dabs)):
+        both = ([], [])
+        solver.reconstruct(base=bases[-1])
+        for b in bases:
+            for times, f in zip(both, (lambda: ps.reconstruct(dec, base=b), lambda: solver.reconstruct(base=b))):
+                t0 = time.perf_counter()
+                f()
+                times.append(time.perf_counter() - t0)
+        print(f"{label:40s} reconstruct {statistics.median(both[0]) * 1e3:6.1f}   "
+              f"Reconstructor {statistics.median(both[1]) * 1e3:6.1f}   (medians of {len(bases)})")
 
 
 def main() -> int:
