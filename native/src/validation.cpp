@@ -101,6 +101,18 @@ void check_normals(const Points* normals, const PointsRef& points, const char* n
     fail(format("%s must have the shape of %s (%lld, 3), got (%lld, 3)", name, points_name,
                 static_cast<long long>(points.rows()), static_cast<long long>(normals->rows())));
   check_points(*normals, name);
+  // A zero normal faces neither way, and orientation follows the sign of a dot product with
+  // it: half of such points would come out turned inward, with nothing to say so.
+  Eigen::Index zero = 0, first = -1;
+  for (Eigen::Index i = 0; i < normals->rows(); ++i) {
+    if (normals->row(i).squaredNorm() > 0.0) continue;
+    if (first < 0) first = i;
+    ++zero;
+  }
+  if (zero > 0)
+    fail(format("%s: %lld of them are zero (the first at point %lld); a zero normal faces neither way. Give "
+                "oriented normals, or none to estimate them", name, static_cast<long long>(zero),
+                static_cast<long long>(first)));
 }
 
 double check_extent(const PointsRef& points, const char* name, bool minimum) {

@@ -93,8 +93,6 @@ def project_sheets(points, onto, *, kernel: float = 1.0, sheet: float = 0.2, ont
     mls = mls_options(neighbors, tolerance, max_iterations)
     nrm = as_normals_of(onto_normals, s, "onto_normals", "onto")
     if nrm is not None:  # unit normals for the core: turning them so is this package's conversion
-        if not (np.linalg.norm(nrm, axis=1) > 0).all():
-            raise ValueError("onto_normals contains zero vectors")
         nrm = nrm / np.linalg.norm(nrm, axis=1)[:, None]
         if not np.isfinite(nrm).all():
             raise ValueError("onto_normals has vectors too short to normalise")

@@ -1,6 +1,7 @@
 """The commands: decompose, reconstruct, info, demo."""
 from __future__ import annotations
 
+import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -15,6 +16,18 @@ from .level_files import finest_normals, level_scan, reconstruct_with_normals
 from .output_checks import check_format_holds, check_input_kept, check_output_file, check_output_folder, read_base, writable_extension
 from .progress import CommandProgress
 from .staged_output import StagedOutput
+
+
+def normals_to_use(scan, args):
+    """The file's normals for decompose, or None to estimate them: when asked, or when every one
+    is zero, as some exporters write for a scan without normals (said on stderr)."""
+    if scan.normals is None or args.estimate_normals:
+        return None
+    if not np.any(scan.normals):
+        print(f"{args.input}: every normal in the file is zero; decomposing with estimated normals",
+              file=sys.stderr)
+        return None
+    return scan.normals
 
 
 def parse_gains(text: str, bands: int) -> np.ndarray:
@@ -131,11 +144,13 @@ def cmd_decompose(args) -> None:
         start = time.perf_counter()
         try:
             dec = decompose(scan.points, levels=args.levels, decimation=args.decimation, kernel=args.kernel,
-                            neighbors=args.neighbors, normals=scan.normals, smoother=args.smoother,
+                            neighbors=args.neighbors, normals=normals_to_use(scan, args), smoother=args.smoother,
                             encoding=args.encoding, threads=args.threads, progress=progress.stage("decomposing"),
                             faces=scan.faces if args.parts == "faces" and scan.n_faces else None,
                             sheets=args.sheets, mirror=mirror_option(args))
         except ValueError as exc:
+            if str(exc).startswith("normals:") and "zero" in str(exc):
+                raise ValueError(f"{args.input}: {exc} (on the command line, --estimate-normals)") from None
             if str(exc).startswith(("points", "normals", "all points", "sheets")):  # about the file's data: name it
                 raise ValueError(f"{args.input}: {exc}") from None
             if str(exc).startswith("every connected part"):

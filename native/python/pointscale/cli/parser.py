@@ -106,6 +106,9 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
                    help="the point the mirror planes pass through, in the file's coordinates")
     d.add_argument("--mirror-seam", metavar="DISTANCE", type=float,
                    help="points this close to a plane are on it (default: 1e-6 of the bounding-box diagonal)")
+    d.add_argument("--estimate-normals", action="store_true",
+                   help="leave the file's normals out and estimate oriented ones (for normals that are partly "
+                        "zero or point inward); a file whose normals are all zero is decomposed this way anyway")
     d.add_argument("--format", help="extension of the level files, e.g. .ply or .las (default: the input's)")
     d.add_argument("--force", action="store_true",
                    help="replace an earlier decomposition in the output folder (its level files are removed)")
