@@ -503,6 +503,18 @@ def _warn_estimated_sides(p, threads) -> None:
         warnings.warn(message, stacklevel=3)
 
 
+def _missed_rays_of_parts(parts, bands: int) -> list:
+    """Per band of the whole, the points (whole-model indices) whose ray missed in any part; a
+    part with fewer bands has them at the finest of the whole's (pointscale.parts)."""
+    missed = [[] for _ in range(bands)]
+    for idx, part, _ in parts:
+        if part is None:
+            continue
+        for b, m in enumerate(rays_missed_points(part)):
+            missed[bands - part.n_bands + b].append(idx[np.asarray(m, dtype=np.int64)])
+    return [np.sort(np.concatenate(m)).astype(np.int32) if m else np.zeros(0, np.int32) for m in missed]
+
+
 def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> Decomposition:
     """decompose() of each connected part alone, joined into one Decomposition (pointscale.parts)."""
     from .parts import decompose_parts, parts_warning
@@ -525,17 +537,25 @@ def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> 
             finally:
                 _SIDES_CHECKED.reset(checked)
 
+    parts = []
     arrays, stats, reports = decompose_parts(p, n_arr, labels, count, levels, decimation, neighbors,
                                              MIN_COARSE_POINTS, decompose_one, progress, origin,
-                                             threads=thread_option(options["threads"]))
+                                             threads=thread_option(options["threads"]), parts_out=parts)
     model = _core.Model.from_arrays(arrays)
     dec_settings = dict(levels=levels, decimation=decimation, kernel=options["kernel"], neighbors=neighbors,
                         tolerance=options["tolerance"], max_iterations=options["max_iterations"],
                         max_variation=options["max_variation"], smoother=options["smoother"],
                         encoding=options["encoding"], parts=reports)
+    if options["smoother"] == "diffusion":  # as one part records it
+        dec_settings["diffusion"] = settings_record(smoother_options(
+            options["diffusion_iterations"], options["lam"], options["taubin"], options["diffusion_neighbors"]))
+    missed = None
+    if options["encoding"] == "rayshoot":
+        missed = _missed_rays_of_parts(parts, levels - 1)
+        dec_settings["rays_missed"] = [int(len(m)) for m in missed]
     if options.get("sheets"):
         dec_settings["sheets"] = True
-    dec = Decomposition(model, origin, dec_settings, _stats=stats)
+    dec = Decomposition(model, origin, dec_settings, _stats=stats, _missed_rays=missed)
     _require_finite_model(dec)
     for message in (coarse_base_warning(int(sizes.max()), levels, decimation), parts_warning(reports, levels)):
         if message:

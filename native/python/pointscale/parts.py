@@ -174,7 +174,8 @@ def levels_kept(sizes: np.ndarray, levels: int, decimation: float, neighbors: in
 
 
 def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, levels: int, decimation: float,
-                    neighbors: int, minimum: int, decompose_one, progress, origin: np.ndarray, threads: int = 0):
+                    neighbors: int, minimum: int, decompose_one, progress, origin: np.ndarray, threads: int = 0,
+                    parts_out: list | None = None):
     """Decomposes each part alone and joins them: (model arrays, stats, part reports).
     threads: for the parts too small to decompose, which are joined here.
 
@@ -235,6 +236,8 @@ def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, leve
     arrays["parts"] = np.ascontiguousarray(labels, dtype=np.int32)
     reports = [_part_report(part, idx, dec, reason, levels, p) for part, (idx, dec, reason) in enumerate(parts)]
     stats = _joined_stats(parts, k, sizes)
+    if parts_out is not None:  # (point indices, Decomposition or None, reason) per part
+        parts_out.extend(parts)
     return arrays, stats, reports
 
 
