@@ -190,6 +190,9 @@ def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy):
     """(name -> values for the point records, [ExtraBytesParams] for fields the format lacks)."""
     values, params = {}, []
     declared = {d["name"]: d for d in info.get("extra_dimensions", [])}
+    coordinate = [name for name in attributes if name in ("x", "y", "z", "X", "Y", "Z")]
+    if coordinate:  # LAS holds the coordinates as X, Y, Z and shows them as x, y, z
+        raise ValueError(f"vertex attribute {coordinate[0]!r} clashes with the coordinates (LAS X, Y, Z)")
     if scan.normals is not None:
         clash = [name for name in NORMAL_NAMES if name in attributes]
         if clash:  # the user's own values under those names would be overwritten
