@@ -1,0 +1,120 @@
+"""A fourth reader's findings in the package and the command line: each test failed before its fix."""
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import pointscale as ps
+from pointscale import io
+from pointscale.multiscale import _missed_rays_of_parts
+
+
+def _cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "pointscale", *map(str, args)], cwd=cwd, capture_output=True,
+                          text=True)
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    points = ps.shapes.bumpy_sphere(6000, noise=0.0)
+    return points, points / np.linalg.norm(points, axis=1)[:, None]
+
+
+@pytest.mark.parametrize("zero_share", [1.0, 0.1, 1 / 6000])
+def test_zero_normals_are_refused_everywhere_they_orient(sphere, zero_share):
+    """A zero normal faces neither way: orientation took the sign of a dot product with it, and
+    about half of those points came out turned inward, silently."""
+    points, outward = sphere
+    normals = outward.copy()
+    zero = np.random.default_rng(0).random(len(points)) < zero_share
+    zero[-1] = True
+    normals[zero] = 0.0
+    first = int(np.flatnonzero(zero)[0])
+    message = f"normals: {zero.sum()} of them are zero \\(the first at point {first}\\)"
+    with pytest.raises(ValueError, match=message):
+        ps.decompose(points, 3, normals=normals)
+    n = len(points)  # two parts, decomposed apart
+    with pytest.raises(ValueError, match="normals: .* of them are zero"):
+        ps.decompose(np.vstack([points, points + [4.0, 0.0, 0.0]]), 3, normals=np.vstack([normals, normals]),
+                     edges=np.array([[0, 1], [n, n + 1]]))
+    base = ps.ellipsoid_base(points, n=len(points))
+    for call in (lambda: ps.morph(points, points * 1.05, base, base_normals=normals),
+                 lambda: ps.encode(points, base, base_normals=normals)):
+        with pytest.raises(ValueError, match="base_normals: .* of them are zero"):
+            call()
+    with pytest.raises(ValueError, match="onto_normals: .* of them are zero"):
+        ps.project_sheets(points[:100], points, onto_normals=normals)
+
+
+def test_normals_that_are_tiny_but_not_zero_still_orient(sphere):
+    points, outward = sphere
+    dec = ps.decompose(points, 3, normals=outward * 1e-100)
+    assert (np.einsum("ij,ij->i", dec.normals(0), outward) > 0).all()
+
+
+def test_the_command_line_estimates_normals_a_file_holds_as_zeros(tmp_path, sphere):
+    points, outward = sphere
+    io.write(tmp_path / "zeros.ply", io.Scan(points=points, normals=np.zeros_like(points)))
+    r = _cli("decompose", "zeros.ply", "-o", "out", "--levels", "3", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "every normal in the file is zero; decomposing with estimated normals" in r.stderr
+    level0 = io.read(tmp_path / "out" / "level_0.ply")
+    assert (np.einsum("ij,ij->i", level0.normals, outward) > 0).mean() > 0.999
+
+    partly = outward.copy()
+    partly[::7] = 0.0
+    io.write(tmp_path / "partly.ply", io.Scan(points=points, normals=partly))
+    r = _cli("decompose", "partly.ply", "-o", "out2", "--levels", "3", cwd=tmp_path)
+    assert r.returncode != 0
+    assert "partly.ply: normals: 858 of them are zero" in r.stderr and "--estimate-normals" in r.stderr
+    r = _cli("decompose", "partly.ply", "-o", "out2", "--levels", "3", "--estimate-normals", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+
+
+def _two_spheres():
+    a = ps.shapes.bumpy_sphere(3000, noise=0.0)
+    return np.vstack([a, a + [4.0, 0.0, 0.0]])
+
+
+def test_parts_record_the_diffusion_settings_as_one_part_does():
+    points = _two_spheres()
+    edges = np.array([[0, 1], [3000, 3001]])
+    options = dict(smoother="diffusion", diffusion_iterations=7, lam=0.3)
+    alone = ps.decompose(points[:3000], 3, **options)
+    parts = ps.decompose(points, 3, edges=edges, **options)
+    assert len(parts.settings["parts"]) == 2
+    assert parts.settings["diffusion"] == alone.settings["diffusion"]
+    assert parts.settings["diffusion"]["iterations"] == 7 and parts.settings["diffusion"]["lam"] == 0.3
+
+
+def test_parts_record_the_rays_that_missed():
+    points = _two_spheres()
+    parts = ps.decompose(points, 3, edges=np.array([[0, 1], [3000, 3001]]), encoding="rayshoot")
+    alone = [ps.decompose(points[:3000], 3, encoding="rayshoot"), ps.decompose(points[3000:], 3, encoding="rayshoot")]
+    assert parts.settings["rays_missed"] == [sum(d.settings["rays_missed"][b] for d in alone) for b in range(2)]
+    assert [len(m) for m in ps.rays_missed_points(parts)] == parts.settings["rays_missed"]
+
+
+class _Part:
+    def __init__(self, missed):
+        self._missed = missed
+        self.n_bands = len(missed)
+
+
+def test_missed_rays_of_parts_are_numbered_in_the_whole_and_aligned_to_its_finest_bands(monkeypatch):
+    """A part with fewer bands has them at the whole's finest (pointscale.parts)."""
+    monkeypatch.setattr("pointscale.multiscale.rays_missed_points", lambda part: part._missed)
+    parts = [(np.array([10, 11, 12]), _Part([np.array([0]), np.array([2])]), None),
+             (np.array([3, 4, 5, 6]), _Part([np.array([1, 3]), np.array([], int), np.array([0])]), None),
+             (np.array([7]), None, "too small")]
+    missed = _missed_rays_of_parts(parts, 3)
+    assert [m.tolist() for m in missed] == [[4, 6], [10], [3, 12]]
+
+
+def test_a_las_attribute_named_like_a_coordinate_is_a_clear_error(tmp_path):
+    points = np.random.default_rng(0).random((100, 3))
+    for name in ("x", "y", "Z"):
+        with pytest.raises(ValueError, match=f"vertex attribute '{name}' clashes with the coordinates"):
+            io.write(tmp_path / "clash.las", io.Scan(points=points, vertex_attributes={name: np.ones(100)}))
+        assert not (tmp_path / "clash.las").exists()
