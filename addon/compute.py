@@ -105,17 +105,57 @@ def _exact_base(dec):
     return exact, _exact_bases[id(dec)][2]
 
 
-def rebuild(solver, dec, base: np.ndarray, gains=None, prevent_folds: bool = False):
+def rebuild(solver, dec, base: np.ndarray, gains=None, prevent_folds: bool = False, residual=None):
     """Full detail on an edited base P^0, each level's normals turned with the base (Sec. 8.1):
-    (points, the Folds of the result). solver: the pointscale.Reconstructor of dec."""
-    return solver.reconstruct(gains, edited_base(dec, base), folds="prevent" if prevent_folds else "report")
+    (points, the Folds of the result). solver: the pointscale.Reconstructor of dec; residual:
+    finest_residual()."""
+    points, folds = solver.reconstruct(gains, edited_base(dec, base), folds="prevent" if prevent_folds else "report")
+    return _with_residual(points, residual, gains), folds
 
 
-def bake(solver, dec, base: np.ndarray, band_values, mask_weights, prevent_folds: bool = False):
-    """Exact recursive reconstruction of the current band gains (with painted masks):
-    (points, the Folds of the result). solver: the pointscale.Reconstructor of dec."""
-    gains = logic.per_point_gains(band_values, mask_weights, dec.n_points)
-    return solver.reconstruct(gains, edited_base(dec, base), folds="prevent" if prevent_folds else "report")
+def bake(solver, dec, base: np.ndarray, band_values, mask_weights, prevent_folds: bool = False, baked=None,
+         residual=None):
+    """Recursive reconstruction of the current band gains (with painted masks), on top of the
+    gains ``baked`` before (logic.combined_gains): (points, the Folds of the result, the gains
+    used). solver: the pointscale.Reconstructor of dec; residual: finest_residual()."""
+    gains = logic.combined_gains(baked, logic.per_point_gains(band_values, mask_weights, dec.n_points))
+    points, folds = solver.reconstruct(gains, edited_base(dec, base), folds="prevent" if prevent_folds else "report")
+    return _with_residual(points, residual, gains), folds, gains
+
+
+def _with_residual(points, residual, gains=None):
+    """``points`` with the residual of finest_residual() as part of the finest band: scaled by
+    that band's gain (per point when painted), as the band keys show it."""
+    if residual is None:
+        return points
+    finest = 1.0 if gains is None else np.asarray(gains, dtype=np.float64)[-1]
+    return points + (finest[:, None] if np.ndim(finest) else finest) * residual
+
+
+# The residual of the decompositions seen last (see finest_residual): a decomposition never
+# changes, and the residual costs a reconstruct.
+_residuals: dict = {}
+
+
+def finest_residual(solver, dec, read_basis) -> np.ndarray | None:
+    """What the engine's finest level leaves out of the Basis, per vertex, or None when it is
+    the Basis itself. Projection (Sec. 7) keeps the input as its finest level; ray shooting
+    (Sec. 6.1) resamples the input's surface there, up to about 1% of the diagonal off the
+    vertices, so Rebuild Detail and Bake Filter add this difference back as part of the finest
+    band (_with_residual), a fixed offset per vertex that does not turn with an edited base:
+    unit gains on an unedited base then give the Basis, and other gains what the band keys show.
+    read_basis: called for the Basis (n, 3) when the residual is not known yet."""
+    if dec.settings.get("encoding") != "rayshoot":
+        return None
+    held = _residuals.get(id(dec))
+    if held is not None and held[0]() is dec:
+        return held[1]
+    residual = np.asarray(read_basis(), dtype=np.float64) - solver.reconstruct()
+    residual.setflags(write=False)
+    if len(_residuals) >= 4:
+        _residuals.pop(next(iter(_residuals)))
+    _residuals[id(dec)] = (weakref.ref(dec), residual)
+    return residual
 
 
 def morph_keys(ps, a: np.ndarray, b: np.ndarray, base_points: np.ndarray | None = None, samples: int = 40000,

@@ -2,22 +2,27 @@
 
 ``Basis`` (never written), ``Level 0..k-1`` (absolute P^l), ``Band 0..k-1``
 (Basis + P^{l+1} - P^l, value = gain - 1, masked by ``Band l mask`` once it is painted),
-``Multiscale Edit`` (Rebuild detail) and ``Multiscale Filter`` (Bake filter).
+``Multiscale Edit`` (Rebuild detail) and ``Multiscale Filter`` (Bake filter). What a new
+decomposition would write over is kept under a " (previous)" name: the last results, and an
+edited ``Level 0``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from . import logic, mesh_io
+from . import logic, mesh_io, recipe
 
 LEVEL = "Level {}"
 BAND = "Band {}"
 MASK = "Band {} mask"
 EDIT = "Multiscale Edit"
 FILTER = "Multiscale Filter"
-PREVIOUS = " (previous)"  # a re-decompose keeps the last results under this suffix
-RESULTS = (EDIT, FILTER, EDIT + PREVIOUS, FILTER + PREVIOUS)  # the result keys' names
+PREVIOUS = " (previous)"  # a re-decompose keeps the last results, and an edited base, under this suffix
+BASE_PREVIOUS = LEVEL.format(0) + PREVIOUS
+KEPT = (EDIT + PREVIOUS, FILTER + PREVIOUS, BASE_PREVIOUS)  # kept for the artist: switched off, never rewritten
+RESULTS = (EDIT, FILTER) + KEPT  # the keys shown alone over the original, or not at all
+WRITTEN_BASE = "pointscale_base"  # mesh ID property: fingerprint of 'Level 0' as Decompose wrote it
 OWNED = "pointscale_keys"  # mesh ID property: the key names this add-on created
 GROUPS = "pointscale_groups"  # mesh ID property: the vertex groups this add-on created
 BAND_MIN = -1.0  # gain 0
@@ -202,18 +207,22 @@ def show_folds(obj, mask: np.ndarray) -> bool:
     return True
 
 
-def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int) -> list:
+def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int, base_fingerprint: str | None = None) -> list:
     """Level and Band keys for k = len(levels) (``bands``: logic.band_key_data). Removes the
-    stale keys this add-on made, keeps the last Multiscale Edit / Filter as "... (previous)",
-    and keeps the active key. Returns the names of the keys it kept that way."""
+    stale keys this add-on made, keeps the last Multiscale Edit / Filter and an edited Level 0
+    as "... (previous)", and keeps the active key. Returns the names of the keys it kept that
+    way. ``base_fingerprint``: recipe.fingerprint of ``levels[0]`` when the caller made it
+    (off the main thread)."""
     mesh = obj.data
     mine = owned(mesh, old_k)
     groups = owned_groups(mesh, old_k)  # recorded from now on, also when the list was not kept yet
     active = obj.active_shape_key.name if obj.active_shape_key is not None else None
     k = levels.shape[0]
+    kept = [BASE_PREVIOUS] if keep_edited_base(obj, mine, levels[0]) else []
     layout = [level_name(l) for l in range(k)] + [band_name(l) for l in range(k)]
     for l in range(k):
         ensure_key(obj, level_name(l), levels[l]).value = 0.0
+    mesh[WRITTEN_BASE] = base_fingerprint or _fingerprint(levels[0])
     for l in range(k):
         before = get(mesh, band_name(l))
         chosen = before.vertex_group if before is not None else ""
@@ -228,36 +237,76 @@ def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int) -> list
             kb.vertex_group = mask.name if mask is not None and mask.name in groups else ""
     for name in sorted(mine - set(layout) - set(RESULTS)):
         remove_key(obj, name)
-    kept = []
-    for name in (EDIT, FILTER):
-        kb = get(mesh, name)
-        if kb is not None and name in mine:
-            if name + PREVIOUS in mine:  # an artist's key of that name is refused before (layout_problem)
-                remove_key(obj, name + PREVIOUS)
-            kb.name = name + PREVIOUS
-            kb.value = 0.0  # kept, not shown: the new decomposition shows the original
-            kept.append(kb.name)
+    kept += [name for name in (EDIT, FILTER) if keep_as_previous(obj, name, mine)]
     # The "(previous)" keys stay the add-on's: the next Decompose replaces them, Clear keeps them.
-    mesh[OWNED] = layout + [name + PREVIOUS for name in (EDIT, FILTER) if get(mesh, name + PREVIOUS) is not None
-                            and (name + PREVIOUS in mine or name + PREVIOUS in kept)]
+    mesh[OWNED] = layout + [name for name in KEPT if get(mesh, name) is not None and (name in mine or name in kept)]
     set_owned_groups(mesh, groups)
     _restore_active(obj, active)
     return kept
 
 
+def _fingerprint(co) -> str:
+    return recipe.fingerprint(np.ascontiguousarray(co, dtype=np.float32))
+
+
+def edited_base(mesh, mine: set, written=None) -> np.ndarray | None:
+    """The 'Level 0' key's positions when the artist edited them since the Decompose wrote it,
+    else None. Decompositions made before the fingerprint was kept count as edited when the key
+    differs from ``written`` (the base about to be written), or, without one, always: better
+    an unneeded copy than a lost edit."""
+    kb = get(mesh, level_name(0))
+    if kb is None or level_name(0) not in mine:
+        return None
+    co = mesh_io.read_key(kb)
+    if WRITTEN_BASE in mesh.keys():
+        return co if _fingerprint(co) != mesh[WRITTEN_BASE] else None
+    if written is not None and np.array_equal(co, np.asarray(written, dtype=np.float32)):
+        return None
+    return co
+
+
+def keep_edited_base(obj, mine: set, written=None) -> bool:
+    """Copies an edited 'Level 0' into the key 'Level 0 (previous)' (replacing an older one),
+    switched off, before a new decomposition or Clear writes over it or removes it."""
+    co = edited_base(obj.data, mine, written)
+    if co is None:
+        return False
+    ensure_key(obj, BASE_PREVIOUS, co).value = 0.0
+    mine.add(BASE_PREVIOUS)
+    return True
+
+
+def keep_as_previous(obj, name: str, mine: set) -> bool:
+    """Renames the add-on's result key ``name`` to "name (previous)", switched off, replacing an
+    older one of the add-on's (an artist's key of that name is refused before: layout_problem)."""
+    kb = get(obj.data, name)
+    if kb is None or name not in mine:
+        return False
+    if name + PREVIOUS in mine:
+        remove_key(obj, name + PREVIOUS)
+    kb.name = name + PREVIOUS
+    kb.value = 0.0  # kept, not shown: what replaces it is shown alone
+    mine.add(name + PREVIOUS)
+    return True
+
+
 def remove_layout(obj, k: int) -> list:
-    """Removes the keys this add-on made, but for the kept "(previous)" results, which stay
-    recorded as the add-on's (a later Decompose replaces them). Returns their names."""
+    """Removes the keys this add-on made, but for the kept "(previous)" keys, which stay
+    recorded as the add-on's (a later Decompose replaces them); an edited Level 0 is kept as
+    one first. Returns their names."""
     mesh = obj.data
     active = obj.active_shape_key.name if obj.active_shape_key is not None else None
     mine = owned(mesh, k)
-    kept = [name for name in (EDIT + PREVIOUS, FILTER + PREVIOUS) if name in mine and get(mesh, name) is not None]
+    keep_edited_base(obj, mine)
+    kept = [name for name in KEPT if name in mine and get(mesh, name) is not None]
     for name in sorted(mine - set(kept)):
         remove_key(obj, name)
     if kept:
         mesh[OWNED] = kept
     elif OWNED in mesh.keys():
         del mesh[OWNED]
+    if WRITTEN_BASE in mesh.keys():
+        del mesh[WRITTEN_BASE]
     _restore_active(obj, active)
     return kept
 

@@ -22,6 +22,7 @@ __all__ = [
     "band_key_data",
     "evaluate_keys",
     "per_point_gains",
+    "combined_gains",
     "detail_colors",
     "split_float64",
     "join_float64",
@@ -30,8 +31,11 @@ __all__ = [
     "column_names",
     "check_points",
     "levels_that_fit",
+    "is_parts_refusal",
     "parts_message",
     "engine_message",
+    "sheets_message",
+    "morph_message",
 ]
 
 
@@ -99,6 +103,17 @@ def per_point_gains(values, weights, n: int) -> np.ndarray | None:
         w = weights[l]
         g[l] = 1.0 + values[l] * (1.0 if w is None else np.asarray(w, dtype=np.float64))
     return g
+
+
+def combined_gains(baked, gains):
+    """The gains of a bake on top of an earlier one: the product per band, and per point when
+    either is painted ((k,) or (k, n) each, as per_point_gains gives them). ``baked`` None: none."""
+    if baked is None:
+        return gains
+    baked, gains = np.asarray(baked, dtype=np.float64), np.asarray(gains, dtype=np.float64)
+    if baked.ndim != gains.ndim:  # one of them per band only: the same gain at every point
+        baked, gains = (baked[:, None], gains) if baked.ndim == 1 else (baked, gains[:, None])
+    return baked * gains
 
 
 # ---------------------------------------------------------------- display
@@ -258,26 +273,38 @@ def check_points(points: np.ndarray, minimum: int = 4) -> str | None:
     return None
 
 
-def levels_that_fit(n: int, levels: int, decimation: float, min_coarse: int) -> tuple[int, str | None]:
+def levels_that_fit(n: int, levels: int, decimation: float, min_coarse: int,
+                    parts: bool = False) -> tuple[int, str | None]:
     """The most levels (at most `levels`) whose coarsest keeps min_coarse of n points at this
     decimation, and what to tell the artist when that is fewer than asked: (levels, message).
+    With ``parts`` (Keep Parts Apart), n is the largest connected part's vertex count: each
+    part is decomposed alone, so the largest part bounds the levels, not the whole mesh.
     Raises ValueError when not even a base and one band fit."""
     def fits(count: int) -> bool:
         return np.floor(decimation ** (count - 1) * n) >= min_coarse
 
+    what = "the largest part of the mesh" if parts else "the mesh"
+    apart = (", or turn off Keep Parts Apart to decompose the parts as one surface" if parts else "")
     fitting = max((count for count in range(2, levels + 1) if fits(count)), default=0)
     if fitting == levels:
         return levels, None
     need = int(np.ceil(min_coarse / decimation ** (levels - 1)))
     if fitting < 2:
         least = int(np.ceil(min_coarse / decimation))
-        raise ValueError(f"the mesh has {n} vertices, and even 2 levels at Decimation {decimation:g} need {least}: "
-                         "subdivide it (a Subdivision Surface modifier, applied) or decompose a denser mesh")
+        raise ValueError(f"{what} has {n} vertices, and even 2 levels at Decimation {decimation:g} need {least}: "
+                         f"subdivide it (a Subdivision Surface modifier, applied) or decompose a denser mesh{apart}")
     wanted = float(np.ceil(100 * (min_coarse / n) ** (1.0 / (levels - 1))) / 100)
     hint = f"raise Decimation to {wanted:g}" if wanted < 1.0 else "use fewer levels"
-    return fitting, (f"the mesh has {n} vertices, and {levels} levels at Decimation {decimation:g} need {need}: "
+    return fitting, (f"{what} has {n} vertices, and {levels} levels at Decimation {decimation:g} need {need}: "
                      f"decomposed with {fitting} levels. For {levels}, subdivide the mesh (a Subdivision Surface "
-                     f"modifier, applied) or {hint}")
+                     f"modifier, applied) or {hint}{apart}")
+
+
+PARTS_REFUSAL = "every connected part is too small"  # how the engine's refusal of too small parts begins
+
+
+def is_parts_refusal(message: str) -> bool:
+    return message.startswith(PARTS_REFUSAL)
 
 
 def parts_message(message: str, neighbors: int, levels: int) -> str:
@@ -286,7 +313,7 @@ def parts_message(message: str, neighbors: int, levels: int) -> str:
     engine's (faces and edges, levels=N); any other message as it is. Each part is decomposed
     alone, so its levels need Neighbours support points of that part, and the engine's counts
     alone can read as a contradiction (a largest part of 441 points refused where 32 are needed)."""
-    if not message.startswith("every connected part is too small"):
+    if not is_parts_refusal(message):
         return message
     found = re.search(r"the largest has (\d+) points", message)
     largest = f" (the largest has {found.group(1)} vertices)" if found else ""
@@ -296,12 +323,51 @@ def parts_message(message: str, neighbors: int, levels: int) -> str:
 
 
 PLANAR_HINT = " (use project() to work with planar data)"  # the engine's hint for Python users
+# The engine's keywords for the panel's settings: (the panel's label, {engine value: the panel's item}).
+PANEL_NAMES = {
+    "smoother": ("Smoother", {"mls": "MLS Projection", "diffusion": "Diffusion"}),
+    "encoding": ("Encoding", {"projection": "Projection", "rayshoot": "Ray Shooting"}),
+}
+SHEETS_REFUSAL = "sheets=True keeps thin sheets apart with"  # how the engine's refusal of other methods begins
+SHEETS_METHODS = {"smoother": "mls", "encoding": "projection"}  # the methods Keep Thin Sheets Apart works with
 
 
 def engine_message(message: str, neighbors: int, levels: int) -> str:
-    """The engine's refusal in the add-on's terms: parts_message, and a flat mesh's refusal
-    without the hint meant for Python users."""
+    """The engine's refusal in the add-on's terms: parts_message, thin sheets' refusals with the
+    panel's names instead of Python keywords, and a flat mesh's refusal without the hint meant
+    for Python users."""
     if PLANAR_HINT in message:
         return message.replace(PLANAR_HINT, ". A flat mesh is all base: give it relief (sculpt it, or apply a "
                                              "Displace modifier) to have detail to edit")
-    return parts_message(message, neighbors, levels)
+    if message.startswith(SHEETS_REFUSAL):
+        return sheets_message(message)
+    return parts_message(message, neighbors, levels).replace("sheets=True", "Keep Thin Sheets Apart")
+
+
+def _panel_setting(keyword: str, value: str) -> str:
+    label, items = PANEL_NAMES[keyword]
+    return f"{label}: {items.get(value, value)}"
+
+
+def sheets_message(message: str) -> str:
+    """The engine's refusal of Keep Thin Sheets Apart with another smoother or encoding, naming
+    the settings as the Decompose panel shows them."""
+    asked = dict(re.findall(r"(smoother|encoding)='(\w+)'", message))
+    other = [_panel_setting(keyword, value) for keyword, value in asked.items() if value != SHEETS_METHODS[keyword]]
+    needed = " and ".join(_panel_setting(keyword, value) for keyword, value in SHEETS_METHODS.items())
+    return (f"Keep Thin Sheets Apart works with {needed} only; {' and '.join(other) or 'these settings'} would blend "
+            "the two sides of a wall. Switch to them, or turn Keep Thin Sheets Apart off")
+
+
+MORPH_TOO_FEW = re.compile(r"^(points_a|points_b|base_points) has (\d+) points; at least (\d+) are needed")
+
+
+def morph_message(message: str, a_name: str, b_name: str, base_name: str | None = None) -> str:
+    """The engine's refusal of a morph in the panel's terms: which object, in vertices, rather
+    than its keyword (points_a, points_b, base_points)."""
+    found = MORPH_TOO_FEW.match(message)
+    if found is None:
+        return message
+    which = {"points_a": f"object A '{a_name}'", "points_b": f"target B '{b_name}'",
+             "base_points": f"base object '{base_name}'"}[found.group(1)]
+    return f"{which} has {found.group(2)} vertices; Morph needs at least {found.group(3)}"

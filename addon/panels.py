@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import textwrap
+
 import bpy
 
 from . import engine, keys, mirror_modifier, state, storage
@@ -29,6 +31,12 @@ def _why(layout, text):
         box.label(text=text, icon="INFO")
 
 
+def _wrapped(layout, text, icon):
+    """A long message as lines a narrow sidebar shows whole (a label does not wrap)."""
+    for i, line in enumerate(textwrap.wrap(text, 40)):
+        layout.label(text=line, icon=icon if i == 0 else "BLANK1")
+
+
 class POINTSCALE_PT_main(_Panel, bpy.types.Panel):
     bl_label = "Multiscale"
 
@@ -49,9 +57,9 @@ class POINTSCALE_PT_main(_Panel, bpy.types.Panel):
             return
         s = obj.data.multiscale
         if s.n_bands:
-            topo = state.decomposed_problem(obj)
-            if topo:
-                layout.label(text="Topology changed since Decompose", icon="ERROR")
+            problem = state.decomposed_problem(obj)
+            if problem:
+                _wrapped(layout.column(align=True), problem, icon="ERROR")
             else:
                 layout.label(text=f"{s.n_vertices} vertices, {s.n_bands} bands", icon="CHECKMARK")
 

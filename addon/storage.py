@@ -26,6 +26,7 @@ NORMAL = "ms_normal_"
 COLOR = "ms_detail_color"
 ORDER = HIDDEN + "order"
 SHEET_NORMALS = HIDDEN + "sheet_normals"  # the vertex normals Keep Thin Sheets Apart gave the engine
+BAKED = HIDDEN + "baked_"  # + band: the painted gains the Multiscale Filter key holds (baked_gains)
 FORMAT = 2
 
 
@@ -75,7 +76,7 @@ def attribute_names(mesh) -> list:
         return []
     info = mesh[PROP]
     k = int(info.get("k", 0))
-    names = [ORDER, SHEET_NORMALS] + [f"{DETAIL}{l}" for l in range(k)]
+    names = [ORDER, SHEET_NORMALS] + [f"{DETAIL}{l}" for l in range(k)] + [f"{BAKED}{l}" for l in range(k)]
     if info.get("normals", True):  # stores that do not say are taken to have written them, as before
         names += [f"{NORMAL}{l}" for l in range(k)]
     if "meta" in info:  # format 1: the model's columns
@@ -92,6 +93,44 @@ def attributes_problem(mesh, k: int, normals: bool) -> str | None:
         if mesh.attributes.get(name) is not None and name not in mine:
             return f"it has an attribute '{name}' of its own: rename it first, the decomposition writes that name"
     return None
+
+
+def baked_gains(mesh) -> np.ndarray | None:
+    """The gains the 'Multiscale Filter' key was baked with, (k,) or (k, n) per painted point,
+    or None when nothing is baked on this decomposition. Kept in the .blend, so that a bake after
+    a reload goes on from the same gains."""
+    if not has_data(mesh) or "baked" not in mesh[PROP]:
+        return None
+    baked = mesh[PROP]["baked"]
+    if isinstance(baked, str):  # "painted": one column a band
+        k = int(mesh[PROP]["k"])
+        columns = [mesh.attributes.get(f"{BAKED}{l}") for l in range(k)]
+        if any(column is None for column in columns):
+            return None
+        return np.stack([mesh_io.read_attribute(mesh, f"{BAKED}{l}", "FLOAT") for l in range(k)]).astype(np.float64)
+    return np.asarray(list(baked), dtype=np.float64)
+
+
+def store_baked_gains(mesh, gains) -> None:
+    """Records the gains a bake used (see baked_gains). Gains per band as they are; painted ones
+    in single precision, as attributes store them: the next bake reads them back rounded, so
+    that it gives the same bits in this session and after a reload."""
+    drop_baked_gains(mesh)
+    gains = np.asarray(gains, dtype=np.float64)
+    if gains.ndim == 1:
+        mesh[PROP]["baked"] = gains.tolist()
+        return
+    for l, column in enumerate(gains):
+        mesh_io.write_attribute(mesh, f"{BAKED}{l}", "FLOAT", column.astype(np.float32))
+    mesh[PROP]["baked"] = "painted"
+
+
+def drop_baked_gains(mesh) -> None:
+    if not has_data(mesh):
+        return
+    _remove(mesh, [f"{BAKED}{l}" for l in range(int(mesh[PROP].get("k", 0)))])
+    if "baked" in mesh[PROP]:
+        del mesh[PROP]["baked"]
 
 
 def _remove(mesh, names) -> None:

@@ -26,6 +26,7 @@ class KeyData:
     bands: np.ndarray  # (k, n, 3) Band keys
     recipe: dict | None  # see recipe.py; None: store the whole model
     sheet_normals: np.ndarray | None = None  # the vertex normals Keep Thin Sheets Apart gave the engine
+    base_fingerprint: str | None = None  # of levels[0]: tells an edited 'Level 0' at the next Decompose
 
 
 def key_data(layout, basis, kwargs=None, version="") -> KeyData:
@@ -35,8 +36,9 @@ def key_data(layout, basis, kwargs=None, version="") -> KeyData:
     bands = logic.band_key_data(basis, layout.levels).astype(np.float32)
     made = recipe.make(kwargs, basis, version) if kwargs is not None else None
     sheet_normals = (kwargs or {}).get("normals")
-    return KeyData(layout.levels.astype(np.float32), bands, made,
-                   None if sheet_normals is None else np.asarray(sheet_normals, dtype=np.float32))
+    levels = layout.levels.astype(np.float32)
+    return KeyData(levels, bands, made, None if sheet_normals is None else np.asarray(sheet_normals, dtype=np.float32),
+                   recipe.fingerprint(np.ascontiguousarray(levels[0])))
 
 
 def apply_layout(obj, layout, basis=None, kwargs=None, version="", data=None) -> list:
@@ -58,7 +60,7 @@ def apply_layout(obj, layout, basis=None, kwargs=None, version="", data=None) ->
         raise
     # Show Details' colours belong to the decomposition being replaced: give the artist's back.
     drop_detail_colors(mesh)
-    kept = keys.write_layout(obj, data.levels, data.bands, settings.n_bands)
+    kept = keys.write_layout(obj, data.levels, data.bands, settings.n_bands, data.base_fingerprint)
     release_levels(layout.dec)
     token = uuid.uuid4().hex
     mesh[storage.PROP]["token"] = token
@@ -95,8 +97,8 @@ def clear(obj) -> list:
     groups.discard(keys.FOLDS)
     if keys.FOLDS_MARKED in mesh.keys():
         del mesh[keys.FOLDS_MARKED]
-    masks = [keys.mask_name(l) for l in range(k)
-             if keys.mask_name(l) in groups and obj.vertex_groups.get(keys.mask_name(l)) is not None]
+    # Every mask the add-on recorded, also those of bands a later Decompose no longer has.
+    masks = sorted(name for name in groups if obj.vertex_groups.get(name) is not None)
     weights = group_weights.read(obj, masks, len(mesh.vertices)) if masks else []
     painted = []
     for name, w in zip(masks, weights):
@@ -112,8 +114,11 @@ def clear(obj) -> list:
         del mesh[keys.GROUPS]
     if painted:
         notes.append(f"kept the painted {', '.join(painted)} (delete them under Vertex Groups if unwanted)")
-    if previous:
-        notes.append(f"kept the earlier results {', '.join(previous)} (delete them under Shape Keys if unwanted)")
+    if keys.BASE_PREVIOUS in previous:
+        notes.append(f"kept the edited base as '{keys.BASE_PREVIOUS}' (delete it under Shape Keys if unwanted)")
+    results = [name for name in previous if name != keys.BASE_PREVIOUS]
+    if results:
+        notes.append(f"kept the earlier results {', '.join(results)} (delete them under Shape Keys if unwanted)")
     if keys.remove_created_basis(obj) is False:
         notes.append("kept the Basis key: other shape keys need it")
     settings.n_vertices = 0
@@ -125,6 +130,9 @@ def clear(obj) -> list:
 
 
 SHOWN_COLORS = "pointscale_colors"  # mesh ID property: the colour attributes before Show Details
+# Every mesh ID property the add-on sets, by its exact name (a copy of the mesh drops them).
+ID_PROPERTIES = (storage.PROP, keys.OWNED, keys.GROUPS, keys.CREATED_BASIS, keys.FOLDS_MARKED, keys.WRITTEN_BASE,
+                 SHOWN_COLORS)
 
 
 def remember_colors(mesh) -> None:

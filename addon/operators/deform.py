@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import bpy
 
-from .. import compute, engine, group_weights, keys, mesh_io, writeback
+from .. import compute, engine, group_weights, keys, mesh_io, storage, writeback
 from ._common import DecomposedOperator, mode_problem, set_mode
 
 
@@ -82,7 +82,9 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
             dec = writeback.decomposition(mesh, ps)
             base = mesh_io.read_key(keys.get(mesh, keys.level_name(0)))
             solver = writeback.reconstructor(mesh, ps)
-            result, folds = compute.rebuild(solver, dec, base, prevent_folds=mesh.multiscale.prevent_folds)
+            residual = compute.finest_residual(solver, dec, lambda: mesh_io.read_basis(mesh))
+            result, folds = compute.rebuild(solver, dec, base, prevent_folds=mesh.multiscale.prevent_folds,
+                                            residual=residual)
         except ValueError as exc:
             self.report({"ERROR"}, f"Rebuild detail: {exc}")
             self.return_to_mode(obj)
@@ -94,8 +96,9 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
 
 
 class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
-    """Exact reconstruction of the current band gains and masks (normals recomputed)
-    into the 'Multiscale Filter' key; the band sliders go back to gain 1"""
+    """Reconstruct the current band gains and masks (normals recomputed) into the
+    'Multiscale Filter' key, on top of the gains it holds while it is shown; the band sliders
+    go back to gain 1"""
 
     bl_idname = "pointscale.bake_filter"
     bl_label = "Bake Filter"
@@ -122,22 +125,54 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
             values = keys.band_values(mesh, k)
             weights = group_weights.read(obj, keys.band_masks(obj, k), len(mesh.vertices))
             solver = writeback.reconstructor(mesh, ps)
-            result, folds = compute.bake(solver, dec, base, values, weights,
-                                         prevent_folds=mesh.multiscale.prevent_folds)
+            residual = compute.finest_residual(solver, dec, lambda: mesh_io.read_basis(mesh))
+            baked = _baked_gains_shown(mesh, k)
+            result, folds, gains = compute.bake(solver, dec, base, values, weights,
+                                                prevent_folds=mesh.multiscale.prevent_folds, baked=baked,
+                                                residual=residual)
         except ValueError as exc:
             self.report({"ERROR"}, f"Bake filter: {exc}")
             self.return_to_mode(obj)
             return {"CANCELLED"}
+        # A bake the viewport does not show is not built on: keep it rather than write over it.
+        kept = baked is None and keys.keep_as_previous(obj, keys.FILTER, keys.owned(mesh, k))
+        if kept:
+            keys.add_owned(mesh, keys.FILTER + keys.PREVIOUS)
         writeback.show_result(obj, keys.FILTER, result)
+        storage.store_baked_gains(mesh, gains)
         if self.reset_bands:
             for l in range(k):
                 kb = keys.get(mesh, keys.band_name(l))
                 if kb is not None:
                     kb.value = 0.0
-        gains = ", ".join(f"{1 + v:.2f}" for v in values)
-        report_folds(self, obj, folds, f"Baked gains ({gains}) into '{keys.FILTER}'")
+        report_folds(self, obj, folds, f"Baked gains ({_gains_text(values)}){_on_top_text(baked)} into '{keys.FILTER}'")
+        if kept:
+            self.report({"INFO"}, f"Bake filter: the earlier bake, switched off, is kept as "
+                                  f"'{keys.FILTER + keys.PREVIOUS}'")
         self.return_to_mode(obj)
         return {"FINISHED"}
+
+
+def _baked_gains_shown(mesh, k: int):
+    """The gains the 'Multiscale Filter' key was baked with, while the viewport shows that key
+    (the next bake multiplies into them, as the band sliders add onto it); else None."""
+    kb = keys.get(mesh, keys.FILTER)
+    if kb is None or kb.mute or kb.value == 0.0 or keys.FILTER not in keys.owned(mesh, k):
+        return None
+    baked = storage.baked_gains(mesh)
+    return baked if baked is not None and len(baked) == k else None
+
+
+def _gains_text(gains) -> str:
+    return ", ".join(f"{1 + v:.2f}" for v in gains)
+
+
+def _on_top_text(baked) -> str:
+    if baked is None:
+        return ""
+    if baked.ndim == 1:
+        return f" on top of the earlier bake's ({_gains_text(baked - 1)})"
+    return " on top of the earlier bake's painted gains"
 
 
 CLASSES = [POINTSCALE_OT_edit_base, POINTSCALE_OT_rebuild_detail, POINTSCALE_OT_bake_filter]

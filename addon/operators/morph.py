@@ -5,7 +5,7 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
-from .. import compute, engine, keys, mesh_io, state
+from .. import compute, engine, keys, logic, mesh_io, state, storage, writeback
 from ._common import set_mode
 
 
@@ -38,6 +38,79 @@ def morph_problem(context):
     if s.morph_base == "OBJECT" and len(s.morph_base_object.data.vertices) == 0:
         return f"The base mesh '{s.morph_base_object.name}' has no vertices"
     return None
+
+
+def _new_morph_object(context, a_obj, b_obj, p0, pa, pb):
+    """The morph object: a copy of A's mesh at p0 with the keys 'A detail' and 'B detail',
+    linked where the view layer shows it, active and selected. On failure it is removed again."""
+    mesh = a_obj.data.copy()
+    mesh.name = f"{a_obj.name} x {b_obj.name}"
+    obj = bpy.data.objects.new(mesh.name, mesh)
+    try:
+        if mesh.shape_keys is not None:
+            obj.shape_key_clear()
+        _drop_decomposition(obj)
+        mesh_io.write_vertices(mesh, p0)
+        obj.matrix_world = a_obj.matrix_world.copy()
+        _shown_collection(context, a_obj).objects.link(obj)
+        keys.ensure_basis(obj)
+        ka = keys.ensure_key(obj, "A detail", pa, slider=(-1.0, 2.0))
+        kb = keys.ensure_key(obj, "B detail", pb, slider=(-1.0, 2.0))
+        ka.value, kb.value = 1.0, 0.0
+        mesh.update()
+        for o in context.selected_objects:
+            o.select_set(False)
+        obj.select_set(True)
+        context.view_layer.objects.active = obj
+    except Exception:
+        bpy.data.objects.remove(obj)
+        bpy.data.meshes.remove(mesh)
+        raise
+    return obj
+
+
+def _drop_decomposition(obj) -> None:
+    """The copy of A's mesh carries A's decomposition: remove exactly what the add-on made on A
+    (its attributes by name, the vertex groups and ID properties it recorded) and the morph
+    settings; the artist's own data of any name stays."""
+    mesh = obj.data
+    groups = keys.owned_groups(mesh, mesh.multiscale.n_bands)
+    writeback.drop_detail_colors(mesh)
+    storage.clear(mesh)
+    for name in groups:
+        vg = obj.vertex_groups.get(name)
+        if vg is not None:
+            obj.vertex_groups.remove(vg)
+    for prop in writeback.ID_PROPERTIES:
+        if prop in mesh.keys():
+            del mesh[prop]
+    mesh.multiscale.morph_target = None
+    mesh.multiscale.n_bands = 0
+    mesh.multiscale.n_vertices = 0
+    mesh.multiscale.bands.clear()
+
+
+def _shown_collection(context, a_obj):
+    """Where the morph goes: beside A, in the first of A's collections the view layer includes,
+    else the active collection, else the scene's."""
+    included = _included_collections(context.view_layer.layer_collection)
+    for collection in a_obj.users_collection:
+        if collection in included:
+            return collection
+    if context.collection is not None and context.collection in included:
+        return context.collection
+    return context.scene.collection
+
+
+def _included_collections(layer_collection) -> set:
+    """The collections under ``layer_collection`` that the view layer does not exclude."""
+    found = set()
+    if layer_collection.exclude:
+        return found
+    found.add(layer_collection.collection)
+    for child in layer_collection.children:
+        found |= _included_collections(child)
+    return found
 
 
 class POINTSCALE_OT_morph(bpy.types.Operator):
@@ -73,39 +146,15 @@ class POINTSCALE_OT_morph(bpy.types.Operator):
         base = _world_points(s.morph_base_object, a_obj) if s.morph_base == "OBJECT" else None
         try:
             p0, pa, pb, messages = compute.morph_keys(engine.get(), a, b, base, s.morph_samples, s.morph_align)
-        except ValueError as exc:
-            self.report({"ERROR"}, f"Morph: {exc}")
+        except ValueError as exc:  # the engine's keywords for A, B and the base, in the panel's terms
+            base_name = s.morph_base_object.name if s.morph_base == "OBJECT" else None
+            self.report({"ERROR"}, f"Morph: {logic.morph_message(str(exc), a_obj.name, b_obj.name, base_name)}")
             return {"CANCELLED"}
-        mesh = a_obj.data.copy()
-        mesh.name = f"{a_obj.name} x {b_obj.name}"
-        obj = bpy.data.objects.new(mesh.name, mesh)
-        if mesh.shape_keys is not None:
-            obj.shape_key_clear()
-        for name in [a.name for a in mesh.attributes if a.name.startswith((".ps.", "ms_"))]:
-            mesh.attributes.remove(mesh.attributes[name])
-        for prop in ("pointscale", keys.OWNED):
-            if prop in mesh.keys():
-                del mesh[prop]
-        # The copy carries A's vertex groups (stored on the mesh) and morph settings: drop the
-        # band masks and the target, which belong to A's decomposition.
-        for vg in [g for g in obj.vertex_groups if g.name.startswith("Band ") and g.name.endswith(" mask")]:
-            obj.vertex_groups.remove(vg)
-        mesh.multiscale.morph_target = None
-        mesh.multiscale.n_bands = 0
-        mesh.multiscale.n_vertices = 0
-        mesh.multiscale.bands.clear()
-        mesh_io.write_vertices(mesh, p0)
-        obj.matrix_world = a_obj.matrix_world.copy()
-        (a_obj.users_collection[0] if a_obj.users_collection else context.scene.collection).objects.link(obj)
-        keys.ensure_basis(obj)
-        ka = keys.ensure_key(obj, "A detail", pa, slider=(-1.0, 2.0))
-        kb = keys.ensure_key(obj, "B detail", pb, slider=(-1.0, 2.0))
-        ka.value, kb.value = 1.0, 0.0
-        mesh.update()
-        for o in context.selected_objects:
-            o.select_set(False)
-        obj.select_set(True)
-        context.view_layer.objects.active = obj
+        try:
+            obj = _new_morph_object(context, a_obj, b_obj, p0, pa, pb)
+        except (RuntimeError, ValueError) as exc:  # Blender refused a step: nothing half-made stays
+            self.report({"ERROR"}, f"Morph: could not make the new object: {str(exc).strip()}")
+            return {"CANCELLED"}
         for message in messages:
             self.report({"WARNING"}, f"Morph: {message}")
         self.report({"INFO"}, f"Morph '{obj.name}': set 'A detail' (alpha) and 'B detail' (beta) to blend")
