@@ -118,3 +118,24 @@ def test_a_las_attribute_named_like_a_coordinate_is_a_clear_error(tmp_path):
         with pytest.raises(ValueError, match=f"vertex attribute '{name}' clashes with the coordinates"):
             io.write(tmp_path / "clash.las", io.Scan(points=points, vertex_attributes={name: np.ones(100)}))
         assert not (tmp_path / "clash.las").exists()
+
+
+def test_complex_gains_are_refused_rather_than_cut_to_their_real_part():
+    dec = ps.decompose(ps.shapes.bumpy_sphere(3000, noise=0.0), 3)
+    for gains in ([1 + 2j, 1.0], np.ones((2, dec.n_points), complex)):
+        with pytest.raises(ValueError, match="gains must be real numbers"):
+            ps.reconstruct(dec, gains)
+        with pytest.raises(ValueError, match="gains must be real numbers"):
+            ps.Reconstructor(dec).reconstruct(gains)
+
+
+def test_a_mirrored_decomposition_takes_per_band_gains_of_shape_k_by_1_as_any_other():
+    points = ps.shapes.bumpy_sphere(3000, noise=0.0)
+    for dec in (ps.decompose(points, 3), ps.decompose(points[points[:, 0] >= 0], 3, mirror="x")):
+        np.testing.assert_array_equal(ps.reconstruct(dec, np.array([[1.0], [2.0]])), ps.reconstruct(dec, [1.0, 2.0]))
+
+
+def test_morph_names_its_base_samples_option():
+    a = ps.shapes.bumpy_sphere(3000, noise=0.0)
+    with pytest.raises(ValueError, match="base_samples must be >= 8, got 0"):
+        ps.morph(a, a * 1.02, base_samples=0)

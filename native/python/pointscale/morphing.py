@@ -90,7 +90,12 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_sam
         b, placement = carry.apply(b), carry.inverse()
     if base_points is None:
         from .operators import ellipsoid_base
-        base_points = ellipsoid_base(a, b, n=base_samples)
+        try:
+            base_points = ellipsoid_base(a, b, n=base_samples)
+        except ValueError as exc:  # its n is this function's base_samples
+            if str(exc).startswith("n "):
+                raise ValueError("base_samples" + str(exc)[1:]) from None
+            raise
     share = overlap(a, b)
     if share < OVERLAP_WARNING:
         warnings.warn(f"A and B barely overlap (their bounding boxes share {share:.0%}), so the base lies far from "

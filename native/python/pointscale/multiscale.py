@@ -579,14 +579,20 @@ def _gains_array(dec: Decomposition, gains) -> np.ndarray:
     if gains is None:
         return np.ones(k)
     try:
-        g = np.asarray(gains, dtype=np.float64)
+        g = np.asarray(gains)
+        if g.dtype == object or not (np.issubdtype(g.dtype, np.floating) or np.issubdtype(g.dtype, np.integer)
+                                     or g.dtype == bool):
+            raise TypeError(g.dtype)  # complex ones would lose their imaginary part
+        g = g.astype(np.float64)
     except (TypeError, ValueError):
-        raise ValueError("gains must be numbers: (k,) per band or (k, n) per point") from None
+        raise ValueError("gains must be real numbers: (k,) per band or (k, n) per point") from None
     # The core checks the shape, finiteness and size (validation.h); a mirrored decomposition's
-    # gains are first the half's, which only this package knows.
-    if g.ndim not in (1, 2) or (dec._mirror is not None and g.ndim == 2 and g.shape != (k, n)):
+    # gains are first the half's, which only this package knows. (k, 1) is per band, as the
+    # core takes it.
+    per_point = g.ndim == 2 and g.shape != (k, 1)
+    if g.ndim not in (1, 2) or (dec._mirror is not None and per_point and g.shape != (k, n)):
         raise ValueError(f"gains must have shape ({k},) per band or ({k}, {n}) per point, got {g.shape}")
-    if g.ndim == 2 and dec._mirror is not None:
+    if per_point and dec._mirror is not None:
         g = dec._mirror.full_values(g)  # a point's reflections take its gains
     return np.ascontiguousarray(g)
 
