@@ -139,3 +139,10 @@ def test_morph_names_its_base_samples_option():
     a = ps.shapes.bumpy_sphere(3000, noise=0.0)
     with pytest.raises(ValueError, match="base_samples must be >= 8, got 0"):
         ps.morph(a, a * 1.02, base_samples=0)
+
+
+def test_the_gain_limit_names_the_gain_as_given():
+    """It said 'got 1e+06' of 1000000.5, which reads as within the limit."""
+    dec = ps.decompose(ps.shapes.bumpy_sphere(3000, noise=0.0), 3)
+    with pytest.raises(ValueError, match=r"gains must be within \+-1e\+06, got 1000000.5$"):
+        ps.reconstruct(dec, [1000000.5, 1.0])

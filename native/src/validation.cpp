@@ -314,7 +314,7 @@ void check_gains(const Eigen::MatrixXd& gains, int bands, Eigen::Index points) {
                 static_cast<long long>(gains.cols())));
   if (!gains.allFinite()) fail("gains contain NaN or infinite values");
   const double largest = gains.size() ? gains.cwiseAbs().maxCoeff() : 0.0;
-  if (largest > max_gain) fail(format("gains must be within +-%.0e, got %.3g", max_gain, largest));
+  if (largest > max_gain) fail(format("gains must be within +-%.0e, got %.17g", max_gain, largest));
 }
 
 void check_rows(Eigen::Index rows, Eigen::Index points, const char* name) {
