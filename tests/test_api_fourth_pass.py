@@ -146,3 +146,15 @@ def test_the_gain_limit_names_the_gain_as_given():
     dec = ps.decompose(ps.shapes.bumpy_sphere(3000, noise=0.0), 3)
     with pytest.raises(ValueError, match=r"gains must be within \+-1e\+06, got 1000000.5$"):
         ps.reconstruct(dec, [1000000.5, 1.0])
+
+
+def test_demo_replaces_an_earlier_demo_but_not_a_file_of_its_names_it_did_not_write(tmp_path):
+    assert _cli("demo", "-o", "d", "--points", "2000", cwd=tmp_path).returncode == 0
+    r = _cli("demo", "-o", "d", "--points", "2000", cwd=tmp_path)  # the main job, run again
+    assert r.returncode == 0, r.stderr
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "level_0.ply").write_bytes(b"my scan")
+    r = _cli("demo", "-o", "mine", "--points", "2000", cwd=tmp_path)
+    assert r.returncode != 0 and "already holds level_0.ply" in r.stderr and "--force" in r.stderr
+    assert (tmp_path / "mine" / "level_0.ply").read_bytes() == b"my scan"
+    assert _cli("demo", "-o", "mine", "--points", "2000", "--force", cwd=tmp_path).returncode == 0

@@ -235,8 +235,26 @@ def cmd_info(args) -> None:
     print("settings:", ", ".join(f"{k}={v}" for k, v in dec.settings.items()))
 
 
+DEMO_GAINS = ((1, 1, 0), (1, 1, 2), (0, 0, 1))
+DEMO_FILES = ([level_name(l, ".ply") for l in range(4)] +
+              ["filtered_" + "_".join(str(g) for g in gains) + ".ply" for gains in DEMO_GAINS] +
+              ["handles_original.ply", "handles_multiscale.ply", "handles_single_scale.ply"])
+
+
+def check_demo_folder(out: Path, force: bool) -> None:
+    """The demo writes fixed file names: it replaces them in a folder an earlier demo wrote
+    (all of its files there), and elsewhere only with --force, since they may be the user's."""
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"-o {out} is a file; the demo writes a folder")
+    present = [name for name in DEMO_FILES if (out / name).exists()]
+    if present and len(present) < len(DEMO_FILES) and not force:
+        raise ValueError(f"{out} already holds {present[0]}, which the demo would replace and no earlier demo wrote "
+                         "(its other files are missing); pass --force to replace it, or choose another folder")
+
+
 def cmd_demo(args) -> None:
     out = Path(args.output)
+    check_demo_folder(out, args.force)
     out.mkdir(parents=True, exist_ok=True)
     print("Pointscale demo: a bumpy sphere with a coarse and a fine pattern plus scanner-like noise")
     points = shapes.bumpy_sphere(args.points, coarse=0.08, fine=0.012, fine_frequency=28.0, noise=0.002)
@@ -252,7 +270,7 @@ def cmd_demo(args) -> None:
         io.write(out / level_name(l, ".ply"), level_scan(template, dec.level(l), normals, detail, ".ply"))
     error = np.abs(reconstruct(dec) - points).max() / np.linalg.norm(np.ptp(points, axis=0))
     print(f"exact reconstruction: max error {error:.2e} of the bounding-box diagonal")
-    for gains in ((1, 1, 0), (1, 1, 2), (0, 0, 1)):
+    for gains in DEMO_GAINS:
         name = "filtered_" + "_".join(str(g) for g in gains) + ".ply"
         io.write_ply(out / name, reconstruct(dec, gains=gains))
         print(f"band filter {gains}: wrote {out / name}")

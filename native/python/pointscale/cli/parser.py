@@ -141,4 +141,6 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
     m.add_argument("-o", "--output", type=path_given, default="pointscale-demo", help="output folder")
     m.add_argument("--points", type=demo_points, default=100000,
                    help=f"points of the demo sphere, {DEMO_POINTS[0]} to {DEMO_POINTS[1]}")
+    m.add_argument("--force", action="store_true",
+                   help="replace files of the demo's names in a folder an earlier demo did not write")
     return parser
