@@ -155,6 +155,40 @@ def test_demo_replaces_an_earlier_demo_but_not_a_file_of_its_names_it_did_not_wr
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "level_0.ply").write_bytes(b"my scan")
     r = _cli("demo", "-o", "mine", "--points", "2000", cwd=tmp_path)
-    assert r.returncode != 0 and "already holds level_0.ply" in r.stderr and "--force" in r.stderr
+    assert r.returncode != 0 and "already holds level_0.ply, a name the demo writes" in r.stderr and "--force" in r.stderr
     assert (tmp_path / "mine" / "level_0.ply").read_bytes() == b"my scan"
     assert _cli("demo", "-o", "mine", "--points", "2000", "--force", cwd=tmp_path).returncode == 0
+
+
+def test_demo_writes_all_of_its_files_or_none(tmp_path, monkeypatch):
+    """An interrupted demo left some of its files, and a second run then refused the folder."""
+    import pointscale.cli.commands as commands
+    from pointscale.cli import main
+
+    calls = []
+
+    def failing_write(path, points):
+        calls.append(path)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(path, points)
+    real = commands.io.write_ply
+    monkeypatch.setattr(commands.io, "write_ply", failing_write)
+    assert main(["demo", "-o", str(tmp_path / "d"), "--points", "2000"]) == 130  # "interrupted"
+    assert not (tmp_path / "d").exists()  # nothing of it: not its files, not the folder it made
+    monkeypatch.undo()
+    assert _cli("demo", "-o", "d", "--points", "2000", cwd=tmp_path).returncode == 0
+    assert sorted(p.name for p in (tmp_path / "d").iterdir()) == sorted(commands.DEMO_FILES)
+
+
+def test_a_folder_or_a_file_of_another_kind_is_named_for_what_it_is(tmp_path):
+    (tmp_path / "result.ply").mkdir()
+    with pytest.raises(ValueError, match="result.ply is a folder, not a file"):
+        io.read(tmp_path / "result.ply")
+    io.write(tmp_path / "scan.ply", io.Scan(points=ps.shapes.bumpy_sphere(2000, noise=0.0)))
+    with pytest.raises(ValueError, match="scan.ply: it is not a decomposition file"):
+        ps.load(tmp_path / "scan.ply")  # np.load said 'Cannot load file containing pickled data'
+    r = _cli("info", "scan.ply", cwd=tmp_path)
+    assert r.returncode != 0 and "not a decomposition file" in r.stderr and "pickle" not in r.stderr
+    r = _cli("decompose", "scan.ply", "-o", "out", "--format", ".txt", cwd=tmp_path)
+    assert r.returncode != 0 and "--format .txt: unknown extension '.txt'" in r.stderr

@@ -188,6 +188,17 @@ class Decomposition:
 def load(path) -> Decomposition:
     """Reads a file written by Decomposition.save. A file that cannot be read, or whose arrays
     do not make a decomposition, raises ValueError."""
+    if os.path.isdir(os.fspath(path)):
+        raise ValueError(f"cannot read decomposition {path!s}: it is a folder, not a file")
+    try:
+        with open(os.fspath(path), "rb") as head:
+            magic = head.read(6)
+    except OSError as exc:
+        raise ValueError(f"cannot read decomposition {path!s}: {exc.strerror or exc}") from None
+    if not magic.startswith((b"PK\x03\x04", b"PK\x05\x06", b"\x93NUMPY")):
+        # np.load would take it for a pickle, and say so
+        raise ValueError(f"cannot read decomposition {path!s}: it is not a decomposition file (the .npz that "
+                         "decompose or Decomposition.save writes)")
     try:
         f = np.load(os.fspath(path), allow_pickle=False)
         if not isinstance(f, np.lib.npyio.NpzFile):

@@ -13,7 +13,8 @@ from ..folds import with_folds
 from ..multiscale import _base_array
 from .folder import DECOMPOSITION_FILE, SOURCE_FILE, level_name, read_decomposition
 from .level_files import finest_normals, level_scan, reconstruct_with_normals
-from .output_checks import check_format_holds, check_input_kept, check_output_file, check_output_folder, read_base, writable_extension
+from .output_checks import (check_format_holds, check_input_kept, check_output_file, check_output_folder, read_base,
+                            require_writable_folder, writable_extension)
 from .progress import CommandProgress
 from .staged_output import StagedOutput
 
@@ -131,7 +132,8 @@ class _Writers:
 def cmd_decompose(args) -> None:
     out = Path(args.output)
     if args.format:
-        extension = writable_extension("level" + "." * (not args.format.startswith(".")) + args.format, "--format")
+        extension = writable_extension("level" + "." * (not args.format.startswith(".")) + args.format, "--format",
+                                       shown=args.format)
     else:
         extension = writable_extension(args.input, "input")
     check_input_kept(Path(args.input), out)  # first: --force would not help
@@ -242,20 +244,37 @@ DEMO_FILES = ([level_name(l, ".ply") for l in range(4)] +
 
 
 def check_demo_folder(out: Path, force: bool) -> None:
-    """The demo writes fixed file names: it replaces them in a folder an earlier demo wrote
-    (all of its files there), and elsewhere only with --force, since they may be the user's."""
+    """The demo writes fixed file names, all at once: it replaces them where an earlier demo
+    wrote them all, and elsewhere only with --force, since they may be the user's. Checked, as
+    the folder's writability is, before any computing."""
     if out.exists() and not out.is_dir():
         raise ValueError(f"-o {out} is a file; the demo writes a folder")
+    require_writable_folder(out)
     present = [name for name in DEMO_FILES if (out / name).exists()]
     if present and len(present) < len(DEMO_FILES) and not force:
-        raise ValueError(f"{out} already holds {present[0]}, which the demo would replace and no earlier demo wrote "
-                         "(its other files are missing); pass --force to replace it, or choose another folder")
+        raise ValueError(f"{out} already holds {present[0]}, a name the demo writes, but not all of the demo's files; "
+                         "pass --force to replace it, or choose another folder")
 
 
 def cmd_demo(args) -> None:
     out = Path(args.output)
     check_demo_folder(out, args.force)
-    out.mkdir(parents=True, exist_ok=True)
+    with StagedOutput() as staged:
+        staged.make_dir(out)
+        run_demo(args, out, staged)
+        staged.commit()
+    print(f"all files are in {out.resolve()}")
+
+
+def run_demo(args, out: Path, staged) -> None:
+    """The demo's work, every file written under staged's temporary names."""
+    def write(name, scan_or_points):
+        tmp = staged.temporary(out / name)
+        if isinstance(scan_or_points, io.Scan):
+            io.write(tmp, scan_or_points)
+        else:
+            io.write_ply(tmp, scan_or_points)
+
     print("Pointscale demo: a bumpy sphere with a coarse and a fine pattern plus scanner-like noise")
     points = shapes.bumpy_sphere(args.points, coarse=0.08, fine=0.012, fine_frequency=28.0, noise=0.002)
     start = time.perf_counter()
@@ -267,13 +286,13 @@ def cmd_demo(args) -> None:
     for l in range(dec.n_levels):
         normals = dec.normals(l) if l < dec.n_bands else finest_normals(points, dec.normals(l - 1), 0)
         detail = dec.details[l] if l < dec.n_bands else None
-        io.write(out / level_name(l, ".ply"), level_scan(template, dec.level(l), normals, detail, ".ply"))
+        write(level_name(l, ".ply"), level_scan(template, dec.level(l), normals, detail, ".ply"))
     error = np.abs(reconstruct(dec) - points).max() / np.linalg.norm(np.ptp(points, axis=0))
     print(f"exact reconstruction: max error {error:.2e} of the bounding-box diagonal")
     for gains in DEMO_GAINS:
         name = "filtered_" + "_".join(str(g) for g in gains) + ".ply"
-        io.write_ply(out / name, reconstruct(dec, gains=gains))
-        print(f"band filter {gains}: wrote {out / name}")
+        write(name, reconstruct(dec, gains=gains))
+        print(f"band filter {gains}: writes {out / name}")
 
     print("\nMultiscale deformation (paper Fig. 5): a plane with 16 box handles, base lifted by a bump")
     plane, handle, centres = shapes.handles_plane()
@@ -283,8 +302,7 @@ def cmd_demo(args) -> None:
     multi = reconstruct(dp, base=lifted)
     single = plane.copy()
     single[:, 2] += 0.8 * np.exp(-(plane[:, :2] ** 2).sum(axis=1))
-    io.write_ply(out / "handles_original.ply", plane)
-    io.write_ply(out / "handles_multiscale.ply", multi)
-    io.write_ply(out / "handles_single_scale.ply", single)
-    print(f"wrote {out}/handles_original.ply, handles_multiscale.ply, handles_single_scale.ply")
-    print(f"all files are in {out.resolve()}")
+    write("handles_original.ply", plane)
+    write("handles_multiscale.ply", multi)
+    write("handles_single_scale.ply", single)
+    print(f"writes {out}/handles_original.ply, handles_multiscale.ply, handles_single_scale.ply")

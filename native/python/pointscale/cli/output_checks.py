@@ -12,10 +12,11 @@ from .folder import is_level_file, owned_files
 from .level_files import level_scan
 
 
-def writable_extension(path: Path | str, what: str) -> str:
+def writable_extension(path: Path | str, what: str, shown: str | None = None) -> str:
+    """path's extension, if a supported one; `what` and `shown` (default: path) name it."""
     extension = Path(path).suffix.lower()
     if extension not in io.SUPPORTED_EXTENSIONS:
-        raise ValueError(f"{what} {path}: unknown extension {extension or '(none)'!r}; "
+        raise ValueError(f"{what} {shown if shown is not None else path}: unknown extension {extension or '(none)'!r}; "
                          f"supported: {', '.join(io.SUPPORTED_EXTENSIONS)}")
     return extension
 
@@ -35,6 +36,11 @@ def _require_writable_folder(folder: Path, shown: Path) -> None:
             pass
     except OSError as exc:
         raise ValueError(f"cannot write {shown}: {folder} is not writable ({exc.strerror})") from None
+
+
+def require_writable_folder(out: Path) -> None:
+    """Refuses a folder -o that cannot be written (or made), before any computing."""
+    _require_writable_folder(_nearest_existing(out), out)
 
 
 def check_output_folder(out: Path, force: bool) -> list[Path]:

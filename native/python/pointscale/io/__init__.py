@@ -42,6 +42,8 @@ __all__ = ["Scan", "SUPPORTED_EXTENSIONS", "atomic_write", "read", "read_ply", "
 
 def read(path) -> Scan:
     """The Scan in the file at path, the format chosen by its extension (case-insensitive)."""
+    if os.path.isdir(os.fspath(path)):
+        raise ValueError(f"{os.fspath(path)} is a folder, not a file")
     return _format(path)[0](os.fspath(path))
 
 
