@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import sys
 import time
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -12,7 +13,7 @@ from .. import Mirror, decompose, io, reconstruct, shapes
 from ..folds import with_folds
 from ..multiscale import _base_array
 from .folder import DECOMPOSITION_FILE, SOURCE_FILE, level_name, read_decomposition
-from .level_files import finest_normals, level_scan, reconstruct_with_normals
+from .level_files import FORMATS_WITH_VERTEX_SCALARS, finest_normals, level_scan, reconstruct_with_normals
 from .output_checks import (check_format_holds, check_input_kept, check_output_file, check_output_folder, read_base,
                             require_writable_folder, writable_extension)
 from .progress import CommandProgress
@@ -143,6 +144,9 @@ def cmd_decompose(args) -> None:
         progress.stage("reading")
         scan = io.read(args.input)
         check_format_holds(extension, scan, args.input, shown=out / level_name(0, extension))
+        if extension not in FORMATS_WITH_VERTEX_SCALARS:
+            warnings.warn(f"{extension} has no room for a vertex scalar: the level files leave out each band's detail, "
+                          f"which {DECOMPOSITION_FILE} holds (.ply, .las, .laz and .xyz carry it)", stacklevel=1)
         start = time.perf_counter()
         try:
             dec = decompose(scan.points, levels=args.levels, decimation=args.decimation, kernel=args.kernel,

@@ -49,7 +49,7 @@ def detail_attribute_name(scan) -> str:
 NORMAL_NAMES = ("nx", "ny", "nz")
 
 
-# Formats with room for a vertex scalar of our own; the others would drop the detail with a warning.
+# Formats with room for a vertex scalar of our own; decompose warns that the others leave the detail out.
 FORMATS_WITH_VERTEX_SCALARS = (".ply", ".las", ".laz", ".xyz")
 # Formats that store normals as vertex properties named nx, ny, nz (the others, OBJ's vn or
 # OFF's NOFF columns, keep them apart from the attributes, which cannot clash with them).
