@@ -60,77 +60,72 @@ RayHits shoot_rays(const Points& origins, const Points& directions, const Spatia
         if (!(std::abs(t) <= limit)) break;
         if (step <= options.tolerance * h(idx[0])) { hit = true; break; }
       }
-      // Bracketing: the signed distance to the local plane, normal turned along the ray, changes
-      // sign where the ray crosses the surface. Searched outward from the origin in half-kernel
-      // steps, both ways in turn, and bisected: a crossing where the distance vanishes (clean),
-      // or one where it does not (unclear: a fit that jumps, or folds of the fitted normal).
-      support.knn(o.data(), 1, idx.data(), d2.data());
-      const double h0 = h(idx[0]);
-      enum class Crossing { none, clean, unclear };
-      auto nearest_crossing = [&](double range, bool stop_at_unclear, double& found_t) {
-        const double dt = 0.5 * h0;
-        auto signed_distance = [&](double tt, bool& ok) {
-          const Vec3 x = o + tt * d;
-          const int found = support.knn(x.data(), k, idx.data(), d2.data());
-          for (int j = 0; j < found; ++j) ih2[j] = inv_h2(idx[j]);
-          floored_gaussian_weights(d2.data(), ih2.data(), found, w.data());
-          const PlaneFit fit = fit_weighted_plane(s, idx.data(), w.data(), found, x);
-          ok = fit.ok && std::abs(fit.normal.dot(d)) >= options.min_cosine;
-          return ok ? (x - fit.mean).dot(fit.normal.dot(d) > 0 ? fit.normal : Vec3(-fit.normal)) : 0.0;
-        };
-        bool ok0;
-        const double f0 = signed_distance(0.0, ok0);
-        double side_t[2] = {0.0, 0.0}, side_f[2] = {f0, f0};
-        bool side_ok[2] = {ok0, ok0};
-        for (double step = dt; dt > 0.0 && step <= range; step += dt) {  // dt = 0 would never end
-          for (int side = 0; side < 2; ++side) {
-            const double tt = side ? -step : step;
-            bool ok;
-            const double f = signed_distance(tt, ok);
-            if (ok && side_ok[side] && (f > 0) != (side_f[side] > 0)) {
-              double lo = side_t[side], hi = tt, flo = side_f[side];
-              for (int bisect = 0; bisect < 60; ++bisect) {
-                const double mid = 0.5 * (lo + hi);
-                bool okm;
-                const double fm = signed_distance(mid, okm);
-                if (!okm) break;
-                if ((fm > 0) == (flo > 0)) { lo = mid; flo = fm; } else { hi = mid; }
-              }
-              bool okt;
-              const double ft = signed_distance(0.5 * (lo + hi), okt);
-              found_t = 0.5 * (lo + hi);
-              if (okt && std::abs(ft) <= 1e-3 * h0) return Crossing::clean;
-              if (stop_at_unclear) return Crossing::unclear;
-            }
-            side_t[side] = tt;
-            side_f[side] = f;
-            side_ok[side] = ok;
-          }
-        }
-        return Crossing::none;
-      };
-      // The MLS zero set runs on past the samples (over holes and boundaries, and out in empty
-      // space): a crossing farther than 3 kernel widths from every sample is no hit.
-      auto near_samples = [&](double tt) {
-        const Vec3 x = o + tt * d;
-        support.knn(x.data(), 1, idx.data(), d2.data());
-        return d2[0] <= 9.0 * h(idx[0]) * h(idx[0]);
-      };
-      double nearer = 0.0;
+      // Where the iteration found no crossing, bracketing: the signed distance to the local
+      // plane, normal turned along the ray, changes sign where the ray crosses the surface.
+      // Searched outward from the origin in half-kernel steps, both ways in turn, and bisected:
+      // a crossing where the distance vanishes (clean), or one where it does not (unclear: a fit
+      // that jumps, or a fold of the fitted normal), which the search passes by. But past an
+      // unclear one, a clean crossing more than 2 kernel widths off is another sheet (the far
+      // side of a small closed part, through its inside), and the ray is a miss.
       if (!hit) {
-        // Where the iteration found no crossing, the first sign change decides: past an unclear
-        // one a clean crossing belongs to another sheet (the far side of a small closed part,
-        // through its inside), and the ray is a miss.
-        hit = nearest_crossing(std::min(limit, 16.0 * h0), true, nearer) == Crossing::clean;
+        support.knn(o.data(), 1, idx.data(), d2.data());
+        const double h0 = h(idx[0]);
+        enum class Crossing { none, clean, unclear };
+        auto nearest_crossing = [&](double range, double& found_t) {
+          bool unclear = false;
+          const double dt = 0.5 * h0;
+          auto signed_distance = [&](double tt, bool& ok) {
+            const Vec3 x = o + tt * d;
+            const int found = support.knn(x.data(), k, idx.data(), d2.data());
+            for (int j = 0; j < found; ++j) ih2[j] = inv_h2(idx[j]);
+            floored_gaussian_weights(d2.data(), ih2.data(), found, w.data());
+            const PlaneFit fit = fit_weighted_plane(s, idx.data(), w.data(), found, x);
+            ok = fit.ok && std::abs(fit.normal.dot(d)) >= options.min_cosine;
+            return ok ? (x - fit.mean).dot(fit.normal.dot(d) > 0 ? fit.normal : Vec3(-fit.normal)) : 0.0;
+          };
+          bool ok0;
+          const double f0 = signed_distance(0.0, ok0);
+          double side_t[2] = {0.0, 0.0}, side_f[2] = {f0, f0};
+          bool side_ok[2] = {ok0, ok0};
+          for (double step = dt; dt > 0.0 && step <= range; step += dt) {  // dt = 0 would never end
+            for (int side = 0; side < 2; ++side) {
+              const double tt = side ? -step : step;
+              bool ok;
+              const double f = signed_distance(tt, ok);
+              if (ok && side_ok[side] && (f > 0) != (side_f[side] > 0)) {
+                double lo = side_t[side], hi = tt, flo = side_f[side];
+                for (int bisect = 0; bisect < 60; ++bisect) {
+                  const double mid = 0.5 * (lo + hi);
+                  bool okm;
+                  const double fm = signed_distance(mid, okm);
+                  if (!okm) break;
+                  if ((fm > 0) == (flo > 0)) { lo = mid; flo = fm; } else { hi = mid; }
+                }
+                bool okt;
+                const double ft = signed_distance(0.5 * (lo + hi), okt);
+                found_t = 0.5 * (lo + hi);
+                if (okt && std::abs(ft) <= 1e-3 * h0)
+                  return unclear && std::abs(found_t) > 2.0 * h0 ? Crossing::unclear : Crossing::clean;
+                unclear = true;
+              }
+              side_t[side] = tt;
+              side_f[side] = f;
+              side_ok[side] = ok;
+            }
+          }
+          return unclear ? Crossing::unclear : Crossing::none;
+        };
+        double nearer = 0.0;
+        hit = nearest_crossing(std::min(limit, 16.0 * h0), nearer) == Crossing::clean;
         if (hit) t = nearer;
-      } else if (std::abs(t) > 0.5 * h0) {
-        // The iteration can run along a plane that tilts away and meet the surface far off, on
-        // another sheet, while the ray crosses cleanly nearer the origin.
-        if (nearest_crossing(std::min(std::abs(t), 16.0 * h0), false, nearer) == Crossing::clean &&
-            std::abs(nearer) < std::abs(t) && near_samples(nearer))
-          t = nearer;
       }
-      if (hit && !near_samples(t)) hit = false;
+      if (hit) {
+        // The MLS zero set runs on past the samples (over holes and boundaries): a hit farther
+        // than 3 kernel widths from every sample is no hit.
+        const Vec3 x = o + t * d;
+        support.knn(x.data(), 1, idx.data(), d2.data());
+        if (d2[0] > 9.0 * h(idx[0]) * h(idx[0])) hit = false;
+      }
       if (hit) {
         out.positions.row(i) = (o + t * d).transpose();
         out.distances(i) = t;
