@@ -168,6 +168,9 @@ def thin_walled_box(size=(2.0, 1.6, 1.2), spacing: float = 0.025, gap: float | N
     """
     gap = spacing if gap is None else gap
     half = np.asarray(size, dtype=float) / 2
+    if half.shape != (3,) or not (half > gap).all() or not 0 < spacing < half.min():
+        raise ValueError(f"thin_walled_box needs size as three lengths (x, y, z) above twice the gap {gap} and a "
+                         f"spacing below half the smallest, got size={size!r}, spacing={spacing}")
     outer_p, outer_n = _box_surface(half, spacing)
     inner_p, inner_n = _box_surface(half - gap, spacing)
     outer = np.r_[np.ones(len(outer_p), bool), np.zeros(len(inner_p), bool)]
