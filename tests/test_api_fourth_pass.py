@@ -192,3 +192,10 @@ def test_a_folder_or_a_file_of_another_kind_is_named_for_what_it_is(tmp_path):
     assert r.returncode != 0 and "not a decomposition file" in r.stderr and "pickle" not in r.stderr
     r = _cli("decompose", "scan.ply", "-o", "out", "--format", ".txt", cwd=tmp_path)
     assert r.returncode != 0 and "--format .txt: unknown extension '.txt'" in r.stderr
+
+
+def test_the_command_line_speaks_of_its_own_options(tmp_path):
+    io.write(tmp_path / "s.ply", io.Scan(points=ps.shapes.bumpy_sphere(4000, noise=0.0)))
+    r = _cli("decompose", "s.ply", "-o", "o", "--levels", "3", "--sheets", "--encoding", "rayshoot", cwd=tmp_path)
+    assert r.returncode != 0 and "--sheets keeps thin sheets apart" in r.stderr and "--encoding rayshoot" in r.stderr
+    assert "sheets=True" not in r.stderr and "encoding=" not in r.stderr

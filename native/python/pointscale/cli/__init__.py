@@ -22,11 +22,24 @@ def _one_line(text: str) -> str:
 
 _warned = set()
 
+# The package's messages name its Python options; on the command line they are these.
+_CLI_WORDS = (("sheets=True", "--sheets"), ("smoother='diffusion'", "--smoother diffusion"),
+              ("encoding='rayshoot'", "--encoding rayshoot"), ("smoother='mls'", "--smoother mls"),
+              ("encoding='projection'", "--encoding projection"),
+              ("give outward normals (normals=..., e.g. a mesh's vertex normals)",
+               "give the file outward normals (nx, ny, nz; e.g. a mesh's vertex normals)"))
+
+
+def _in_cli_words(text: str) -> str:
+    for python, cli in _CLI_WORDS:
+        text = text.replace(python, cli)
+    return text
+
 
 def _show_warning(message, category, filename, lineno, file=None, line=None):
     """One line per warning. A writer's warning names the (temporary) file it was writing; the
     same warning for every level is shown once, without the name."""
-    text = _one_line(message)
+    text = _in_cli_words(_one_line(message))
     head, _, rest = text.partition(": ")
     if rest and ("/" in head or "\\" in head):
         text = rest
@@ -51,7 +64,7 @@ def main(argv=None) -> int:
         print("pointscale: cancelled; no files were written", file=sys.stderr)
         return EXIT_ERROR
     except ValueError as exc:
-        print(f"pointscale: error: {_one_line(exc)}", file=sys.stderr)
+        print(f"pointscale: error: {_in_cli_words(_one_line(exc))}", file=sys.stderr)
         return EXIT_ERROR
     except MemoryError:
         print("pointscale: error: out of memory", file=sys.stderr)
