@@ -249,6 +249,12 @@ def _fingerprint(co) -> str:
     return recipe.fingerprint(np.ascontiguousarray(co, dtype=np.float32))
 
 
+def key_fingerprint(mesh, name: str) -> str | None:
+    """A fingerprint of the key ``name``'s positions as they are now, or None without that key."""
+    kb = get(mesh, name)
+    return None if kb is None else _fingerprint(mesh_io.read_key(kb))
+
+
 def edited_base(mesh, mine: set, written=None) -> np.ndarray | None:
     """The 'Level 0' key's positions when the artist edited them since the Decompose wrote it,
     else None. Decompositions made before the fingerprint was kept count as edited when the key
@@ -265,12 +271,25 @@ def edited_base(mesh, mine: set, written=None) -> np.ndarray | None:
     return co
 
 
+def own_key_problem(mesh, name: str, mine: set) -> str | None:
+    """Why the add-on cannot keep something under the key ``name``: the artist has a key of that
+    name of their own, which it must not write over."""
+    if get(mesh, name) is not None and name not in mine:
+        return (f"the mesh has a shape key '{name}' of its own, where the add-on keeps its earlier result; rename "
+                "that key first")
+    return None
+
+
 def keep_edited_base(obj, mine: set, written=None) -> bool:
     """Copies an edited 'Level 0' into the key 'Level 0 (previous)' (replacing an older one),
-    switched off, before a new decomposition or Clear writes over it or removes it."""
+    switched off, before a new decomposition or Clear writes over it or removes it. An artist's
+    own key of that name is never written over: ValueError (own_key_problem)."""
     co = edited_base(obj.data, mine, written)
     if co is None:
         return False
+    problem = own_key_problem(obj.data, BASE_PREVIOUS, mine)
+    if problem:
+        raise ValueError(problem)
     ensure_key(obj, BASE_PREVIOUS, co).value = 0.0
     mine.add(BASE_PREVIOUS)
     return True
@@ -282,6 +301,9 @@ def keep_as_previous(obj, name: str, mine: set) -> bool:
     kb = get(obj.data, name)
     if kb is None or name not in mine:
         return False
+    problem = own_key_problem(obj.data, name + PREVIOUS, mine)
+    if problem:  # Blender would name ours '.001' and the artist's key would pass for ours
+        raise ValueError(problem)
     if name + PREVIOUS in mine:
         remove_key(obj, name + PREVIOUS)
     kb.name = name + PREVIOUS

@@ -95,11 +95,14 @@ def attributes_problem(mesh, k: int, normals: bool) -> str | None:
     return None
 
 
-def baked_gains(mesh) -> np.ndarray | None:
+def baked_gains(mesh, key_fingerprint: str | None) -> np.ndarray | None:
     """The gains the 'Multiscale Filter' key was baked with, (k,) or (k, n) per painted point,
-    or None when nothing is baked on this decomposition. Kept in the .blend, so that a bake after
-    a reload goes on from the same gains."""
+    or None when nothing is baked on this decomposition or the key (of that fingerprint now) is
+    not the one they made. Kept in the .blend, so that a bake after a reload goes on from the
+    same gains."""
     if not has_data(mesh) or "baked" not in mesh[PROP]:
+        return None
+    if key_fingerprint is None or mesh[PROP].get("baked_key") != key_fingerprint:
         return None
     baked = mesh[PROP]["baked"]
     if isinstance(baked, str):  # "painted": one column a band
@@ -111,11 +114,14 @@ def baked_gains(mesh) -> np.ndarray | None:
     return np.asarray(list(baked), dtype=np.float64)
 
 
-def store_baked_gains(mesh, gains) -> None:
-    """Records the gains a bake used (see baked_gains). Gains per band as they are; painted ones
-    in single precision, as attributes store them: the next bake reads them back rounded, so
-    that it gives the same bits in this session and after a reload."""
+def store_baked_gains(mesh, gains, key_fingerprint: str) -> None:
+    """Records the gains a bake used (see baked_gains), with a fingerprint of the key it wrote:
+    an undo in Edit Mode restores the key but not these properties, and a bake must build only
+    on gains that made the key as it is. Gains per band as they are; painted ones in single
+    precision, as attributes store them: the next bake reads them back rounded, so that it gives
+    the same bits in this session and after a reload."""
     drop_baked_gains(mesh)
+    mesh[PROP]["baked_key"] = key_fingerprint
     gains = np.asarray(gains, dtype=np.float64)
     if gains.ndim == 1:
         mesh[PROP]["baked"] = gains.tolist()
@@ -129,8 +135,9 @@ def drop_baked_gains(mesh) -> None:
     if not has_data(mesh):
         return
     _remove(mesh, [f"{BAKED}{l}" for l in range(int(mesh[PROP].get("k", 0)))])
-    if "baked" in mesh[PROP]:
-        del mesh[PROP]["baked"]
+    for name in ("baked", "baked_key"):
+        if name in mesh[PROP]:
+            del mesh[PROP][name]
 
 
 def _remove(mesh, names) -> None:

@@ -77,6 +77,16 @@ def apply_layout(obj, layout, basis=None, kwargs=None, version="", data=None) ->
     return kept
 
 
+def clear_problem(obj) -> str | None:
+    """Why Clear cannot go ahead without losing something: an edited 'Level 0' to keep where the
+    artist has a key of that name of their own. Checked before anything is removed."""
+    mesh = obj.data
+    mine = keys.owned(mesh, max(mesh.multiscale.n_bands, 0))
+    if keys.edited_base(mesh, mine) is None:
+        return None
+    return keys.own_key_problem(mesh, keys.BASE_PREVIOUS, mine)
+
+
 def clear(obj) -> list:
     """Removes everything a decompose made: its keys (and the Basis when the add-on made it and
     nothing else needs it), the stored decomposition, the detail colours (restoring the colour

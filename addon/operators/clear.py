@@ -35,6 +35,10 @@ class POINTSCALE_OT_clear(bpy.types.Operator):
         if problem:
             self.report({"ERROR"}, f"Clear: {problem}")
             return {"CANCELLED"}
+        problem = writeback.clear_problem(obj)
+        if problem:
+            self.report({"ERROR"}, f"Clear: {problem}")
+            return {"CANCELLED"}
         for note in writeback.clear(obj):
             self.report({"INFO"}, f"Clear '{obj.name}': {note}")
         return {"FINISHED"}

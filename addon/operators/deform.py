@@ -135,11 +135,16 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
             self.return_to_mode(obj)
             return {"CANCELLED"}
         # A bake the viewport does not show is not built on: keep it rather than write over it.
-        kept = baked is None and keys.keep_as_previous(obj, keys.FILTER, keys.owned(mesh, k))
+        try:
+            kept = baked is None and keys.keep_as_previous(obj, keys.FILTER, keys.owned(mesh, k))
+        except ValueError as exc:  # the artist's own key of the name it would be kept under
+            self.report({"ERROR"}, f"Bake filter: {exc}")
+            self.return_to_mode(obj)
+            return {"CANCELLED"}
         if kept:
             keys.add_owned(mesh, keys.FILTER + keys.PREVIOUS)
         writeback.show_result(obj, keys.FILTER, result)
-        storage.store_baked_gains(mesh, gains)
+        storage.store_baked_gains(mesh, gains, keys.key_fingerprint(mesh, keys.FILTER))
         if self.reset_bands:
             for l in range(k):
                 kb = keys.get(mesh, keys.band_name(l))
@@ -159,7 +164,7 @@ def _baked_gains_shown(mesh, k: int):
     kb = keys.get(mesh, keys.FILTER)
     if kb is None or kb.mute or kb.value == 0.0 or keys.FILTER not in keys.owned(mesh, k):
         return None
-    baked = storage.baked_gains(mesh)
+    baked = storage.baked_gains(mesh, keys.key_fingerprint(mesh, keys.FILTER))
     return baked if baked is not None and len(baked) == k else None
 
 

@@ -126,6 +126,46 @@ def test_a_bake_switched_off_is_kept_when_the_next_starts_afresh(capfd):
     assert "Multiscale Filter (previous)" in capfd.readouterr().out
 
 
+def test_a_bake_builds_only_on_the_gains_that_made_the_filter_key_as_it_is():
+    """An undo in Edit Mode restores the key but not the mesh's properties: the gains stored
+    for a later bake then no longer made the key, and the next bake must not build on them."""
+    obj = h.mesh_object(h.noisy_sphere(4000), name="Undone")
+    h.decompose(obj)
+    s = obj.data.multiscale
+    s.bands[2].gain = 3.0
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    first = h.key(obj.data, "Multiscale Filter").copy()
+    s.bands[0].gain = 0.5
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    h.set_key(obj.data, "Multiscale Filter", first)  # as the undo leaves it
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}  # at unit gains
+    scale = h.diagonal(h.vertices(obj.data))
+    assert np.abs(h.key(obj.data, "Multiscale Filter") - _engine_result(obj, np.ones(3))).max() < 1e-6 * scale
+    assert np.array_equal(h.key(obj.data, "Multiscale Filter (previous)"), first)
+
+
+def test_an_artists_own_previous_keys_are_never_written_over():
+    obj = h.mesh_object(h.noisy_sphere(4000), name="Mine")
+    h.decompose(obj)
+    # Clear, with an edited base to keep where the artist has a key of that name.
+    lifted_top(obj)
+    own = obj.shape_key_add(name="Level 0 (previous)", from_mix=False)
+    mine = h.key(obj.data, "Level 0 (previous)").copy()
+    h.assert_refused(obj, "clear", "shape key 'Level 0 \\(previous\\)' of its own")
+    assert np.array_equal(h.key(obj.data, "Level 0 (previous)"), mine) and "Level 0" in obj.data.shape_keys.key_blocks
+    obj.shape_key_remove(own)
+    # Bake, with an earlier bake switched off to keep where the artist has a key of that name.
+    obj.data.multiscale.bands[2].gain = 3.0
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    obj.data.shape_keys.key_blocks["Multiscale Filter"].value = 0.0
+    obj.shape_key_add(name="Multiscale Filter (previous)", from_mix=False)
+    mine = h.key(obj.data, "Multiscale Filter (previous)").copy()
+    baked = h.key(obj.data, "Multiscale Filter").copy()
+    h.assert_refused(obj, "bake_filter", "shape key 'Multiscale Filter \\(previous\\)' of its own")
+    assert np.array_equal(h.key(obj.data, "Multiscale Filter (previous)"), mine)
+    assert np.array_equal(h.key(obj.data, "Multiscale Filter"), baked)
+
+
 # ---------------------------------------------------------------- 3-4. Morph
 
 def _excluded_and_shown():
