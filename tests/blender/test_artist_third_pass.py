@@ -109,13 +109,18 @@ def test_a_second_bake_multiplies_into_the_first(tmp_path):
     assert np.array_equal(h.key(obj.data, "Multiscale Filter"), third)
 
 
-def test_a_bake_switched_off_is_kept_when_the_next_starts_afresh(capfd):
-    obj = h.mesh_object(h.noisy_sphere(4000), name="Off")
+def _first_bake(name):
+    """A decomposed sphere with its finest band baked at gain 3: (object, the Filter key)."""
+    obj = h.mesh_object(h.noisy_sphere(4000), name=name)
     h.decompose(obj)
-    s = obj.data.multiscale
-    s.bands[2].gain = 3.0
+    obj.data.multiscale.bands[2].gain = 3.0
     assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
-    first = h.key(obj.data, "Multiscale Filter").copy()
+    return obj, h.key(obj.data, "Multiscale Filter").copy()
+
+
+def test_a_bake_switched_off_is_kept_when_the_next_starts_afresh(capfd):
+    obj, first = _first_bake("Off")
+    s = obj.data.multiscale
     obj.data.shape_keys.key_blocks["Multiscale Filter"].value = 0.0  # the artist looks at the original
     s.bands[0].gain = 0.5
     assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
@@ -129,12 +134,8 @@ def test_a_bake_switched_off_is_kept_when_the_next_starts_afresh(capfd):
 def test_a_bake_builds_only_on_the_gains_that_made_the_filter_key_as_it_is():
     """An undo in Edit Mode restores the key but not the mesh's properties: the gains stored
     for a later bake then no longer made the key, and the next bake must not build on them."""
-    obj = h.mesh_object(h.noisy_sphere(4000), name="Undone")
-    h.decompose(obj)
+    obj, first = _first_bake("Undone")
     s = obj.data.multiscale
-    s.bands[2].gain = 3.0
-    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
-    first = h.key(obj.data, "Multiscale Filter").copy()
     s.bands[0].gain = 0.5
     assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
     h.set_key(obj.data, "Multiscale Filter", first)  # as the undo leaves it
