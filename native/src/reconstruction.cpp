@@ -83,10 +83,13 @@ void turn_towards_feet(const std::vector<HangFromFoot>& hang, Points& p, Reconst
   }, {}, 4096);
 }
 
-// Adds band l to point i along its level normal turned by the edit at its foot.
-inline void add_turned_band(Eigen::Index i, double offset, const Mat3& turn, const Points& nrm, Points& p) {
+// Adds band l to point i along its level normal turned by the edit at its foot; returns that
+// normal.
+inline Eigen::RowVector3d add_turned_band(Eigen::Index i, double offset, const Mat3& turn, const Points& nrm,
+                                          Points& p) {
   const Eigen::RowVector3d n = (turn * nrm.row(i).transpose()).transpose();
   p.row(i) += offset * n;
+  return n;
 }
 
 bool same_bits(const Mat3& a, const Mat3& b) { return std::memcmp(a.data(), b.data(), sizeof(Mat3)) == 0; }
@@ -98,8 +101,9 @@ bool same_bits(const Mat3& a, const Mat3& b) { return std::memcmp(a.data(), b.da
 // turned otherwise; a point is rebuilt where it, its foot, or its foot's turn changed (nothing
 // else enters its bands or its hang). Returns false, having changed nothing, where more than a
 // quarter of the base moved: the whole pass is then as quick.
-bool rebuild_since_last_edit(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points& p,
-                             const std::vector<Mat3>& clusters, const std::vector<const Points*>& normals,
+// edited: the edited base p held when the call began (p receives results as it goes).
+bool rebuild_since_last_edit(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points& edited,
+                             Points& p, const std::vector<Mat3>& clusters, const std::vector<const Points*>& normals,
                              ReconstructionWorkspace& ws, EditRotationReport& report) {
   LastEdit& last = ws.last;
   const Eigen::Index n = p.rows();
@@ -110,7 +114,7 @@ bool rebuild_since_last_edit(const MultiscaleModel& model, const Eigen::MatrixXd
     std::size_t local = 0;
     for (std::size_t i = b; i < e; ++i) {
       const Eigen::Index r = static_cast<Eigen::Index>(i);
-      const double a[3] = {p(r, 0), p(r, 1), p(r, 2)}, was[3] = {last.base(r, 0), last.base(r, 1), last.base(r, 2)};
+      const double a[3] = {edited(r, 0), edited(r, 1), edited(r, 2)}, was[3] = {last.base(r, 0), last.base(r, 1), last.base(r, 2)};
       if (std::memcmp(a, was, sizeof a) != 0) { moved[i] = 1; ++local; }
     }
     how_many += local;
@@ -136,10 +140,9 @@ bool rebuild_since_last_edit(const MultiscaleModel& model, const Eigen::MatrixXd
   IndexList which;
   for (IndexList& part : found) which.insert(which.end(), part.begin(), part.end());
   std::vector<unsigned char> turned_again(count, 0);
-  edit_rotations_of(which, model.base, p, edit.rings, edit.ring_size, clusters, labels, edit.planes, ws.rotation,
+  edit_rotations_of(which, model.base, edited, edit.rings, edit.ring_size, clusters, labels, edit.planes, ws.rotation,
                     last.kinds, turned_again);
-  // The points to rebuild, from the edited base (its copy: p receives results as it goes).
-  const Points edited = p;
+  // The points to rebuild.
   const int k = model.bands();
   const bool per_point = gains.cols() > 1;
   parallel_for(count, [&](std::size_t b, std::size_t e) {
@@ -208,7 +211,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
       stage.report(0.0);  // a callback may cancel here too
       bool rebuilt = false;
       try {
-        rebuilt = rebuild_since_last_edit(model, gains, p, clusters, normals, ws, report);
+        rebuilt = rebuild_since_last_edit(model, gains, given, p, clusters, normals, ws, report);
       } catch (...) {
         ws.last.base.resize(0, 3);  // its turns and kinds may be half updated
         throw;
@@ -267,9 +270,9 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
         const double offset = g * model.details(l, i);
         if (turned) {
           const Mat3& turn = ws.rotation[static_cast<std::size_t>(ws.edit->feet[ii])];
-          add_turned_band(i, offset, turn, nrm, p);
+          const Eigen::RowVector3d n = add_turned_band(i, offset, turn, nrm, p);
           if (!cached) ws.unedited.row(i) += offset * nrm.row(i);
-          if (kept) applied.row(i) = (turn * nrm.row(i).transpose()).transpose();
+          if (kept) applied.row(i) = n;
         } else {
           p.row(i) += offset * nrm.row(i);
         }

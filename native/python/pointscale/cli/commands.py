@@ -242,8 +242,13 @@ def cmd_info(args) -> None:
 
 
 DEMO_GAINS = ((1, 1, 0), (1, 1, 2), (0, 0, 1))
-DEMO_FILES = ([level_name(l, ".ply") for l in range(4)] +
-              ["filtered_" + "_".join(str(g) for g in gains) + ".ply" for gains in DEMO_GAINS] +
+
+
+def demo_filtered_name(gains) -> str:
+    return "filtered_" + "_".join(str(g) for g in gains) + ".ply"
+
+
+DEMO_FILES = ([level_name(l, ".ply") for l in range(4)] + [demo_filtered_name(gains) for gains in DEMO_GAINS] +
               ["handles_original.ply", "handles_multiscale.ply", "handles_single_scale.ply"])
 
 
@@ -294,7 +299,7 @@ def run_demo(args, out: Path, staged) -> None:
     error = np.abs(reconstruct(dec) - points).max() / np.linalg.norm(np.ptp(points, axis=0))
     print(f"exact reconstruction: max error {error:.2e} of the bounding-box diagonal")
     for gains in DEMO_GAINS:
-        name = "filtered_" + "_".join(str(g) for g in gains) + ".ply"
+        name = demo_filtered_name(gains)
         write(name, reconstruct(dec, gains=gains))
         print(f"band filter {gains}: writes {out / name}")
 
