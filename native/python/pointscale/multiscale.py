@@ -188,6 +188,8 @@ class Decomposition:
 def load(path) -> Decomposition:
     """Reads a file written by Decomposition.save. A file that cannot be read, or whose arrays
     do not make a decomposition, raises ValueError."""
+    if not isinstance(path, (str, bytes, os.PathLike)):
+        raise ValueError(f"load needs the path of a decomposition file, got {type(path).__name__}")
     if os.path.isdir(os.fspath(path)):
         raise ValueError(f"cannot read decomposition {path!s}: it is a folder, not a file")
     try:

@@ -125,6 +125,8 @@ def _integers(a, what: str) -> np.ndarray:
         return np.zeros((0, 2), dtype=np.int64)
     if arr.dtype.kind not in "iu":
         raise ValueError(f"{what} must hold integer vertex indices, got dtype {arr.dtype}")
+    if arr.dtype.kind == "u" and arr.max() > np.iinfo(np.int64).max:  # would wrap to a negative index
+        raise ValueError(f"{what} must hold vertex indices, got {arr.max()}")
     return arr.astype(np.int64, copy=False)
 
 

@@ -148,9 +148,10 @@ def cmd_decompose(args) -> None:
             warnings.warn(f"{extension} has no room for a vertex scalar: the level files leave out each band's detail, "
                           f"which {DECOMPOSITION_FILE} holds (.ply, .las, .laz and .xyz carry it)", stacklevel=1)
         start = time.perf_counter()
+        used_normals = normals_to_use(scan, args)
         try:
             dec = decompose(scan.points, levels=args.levels, decimation=args.decimation, kernel=args.kernel,
-                            neighbors=args.neighbors, normals=normals_to_use(scan, args), smoother=args.smoother,
+                            neighbors=args.neighbors, normals=used_normals, smoother=args.smoother,
                             encoding=args.encoding, threads=args.threads, progress=progress.stage("decomposing"),
                             faces=scan.faces if args.parts == "faces" and scan.n_faces else None,
                             sheets=args.sheets, mirror=mirror_option(args))
@@ -173,15 +174,20 @@ def cmd_decompose(args) -> None:
             model_tmp = staged.temporary(out / DECOMPOSITION_FILE)
             source_tmp = staged.temporary(out / SOURCE_FILE)
             writers.submit(lambda: np.savez(model_tmp, **dec.to_dict()), model_tmp, out / DECOMPOSITION_FILE)
-            writers.submit(lambda: np.savez(source_tmp, **scan.to_arrays()), source_tmp, out / SOURCE_FILE)
+            # The source keeps the file's normals where the decomposition used them (not where
+            # they were all zero or --estimate-normals set them aside).
+            source = scan if used_normals is not None else scan.with_geometry(scan.points, None)
+            writers.submit(lambda: np.savez(source_tmp, **source.to_arrays()), source_tmp, out / SOURCE_FILE)
             level_files = [out / level_name(l, extension) for l in range(k + 1)]
             level_tmp = [staged.temporary(f) for f in level_files]
             for l in range(k):
                 writers.submit(lambda l=l: io.write(level_tmp[l], level_scan(scan, levels[l], normals[l],
                                                                              dec.details[l], extension)),
                                level_tmp[l], level_files[l])
-            # The finest level's normals are computed while the other files are written.
-            normals.append(finest_normals(levels[k], normals[k - 1], args.threads))
+            # The finest level is the input: it carries the file's own normals where the
+            # decomposition used them. Otherwise they are computed while the other files are written.
+            normals.append(used_normals if used_normals is not None else finest_normals(levels[k], normals[k - 1],
+                                                                                         args.threads))
             writers.submit(lambda: io.write(level_tmp[k], level_scan(scan, levels[k], normals[k], None, extension)),
                            level_tmp[k], level_files[k])
             writers.wait()
@@ -211,7 +217,13 @@ def cmd_reconstruct(args) -> None:
         if args.folds != "ignore":
             points, folds = with_folds(dec, points, _base_array(dec, base), args.folds, args.fold_reference)
         progress.stage("normals")
-        normals = finest_normals(points, reference, args.threads)
+        # Unedited at unit gains, with nothing limited, the result is the input: its own normals.
+        as_input = (args.base is None and (gains is None or np.all(np.asarray(gains) == 1.0))
+                    and (folds is None or not folds.changed.any()))
+        if as_input and source is not None and source.normals is not None:
+            normals = source.normals
+        else:
+            normals = finest_normals(points, reference, args.threads)
         tmp = staged.temporary(out)
         with _Writers(progress, "writing", expected=1) as writers:
             writers.submit(lambda: io.write(tmp, level_scan(template, points, normals, None, out.suffix.lower())),

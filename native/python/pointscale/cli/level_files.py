@@ -12,8 +12,9 @@ FINEST_NORMAL_NEIGHBORS = 16
 
 def finest_normals(points: np.ndarray, reference: np.ndarray, threads: int) -> np.ndarray:
     """Unit normals of the finest level (n, 3): PCA normals of its own points, each turned to the
-    side of `reference`, the normals (n, 3) of the level below at the same point. The input's
-    normals are not reused: after a filter or an edit they no longer describe the surface."""
+    side of `reference`, the normals (n, 3) of the level below at the same point. For a result
+    other than the input itself: after a filter or an edit the input's normals no longer
+    describe the surface (the input itself carries its own, commands.py)."""
     normals = _core.estimate_normals(points - centre(points), neighbors=FINEST_NORMAL_NEIGHBORS, orient=False,
                                      threads=thread_option(threads))
     flip = np.einsum("ij,ij->i", normals, reference) < 0

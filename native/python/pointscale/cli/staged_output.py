@@ -40,14 +40,36 @@ class StagedOutput:
 
     def commit(self, remove_after=()) -> None:
         """Renames every temporary file into place, then removes the files in `remove_after`
-        (stale outputs of an earlier run). Ctrl-C waits until this is done, so the folder holds
-        either the old result or the new one."""
+        (stale outputs of an earlier run). Ctrl-C waits until this is done, and a rename that
+        fails puts back what the ones before it replaced, so the folder holds either the old
+        result or the new one."""
         with _sigint_held():
+            for _, final in self._pending:  # what no rename can replace, found before any is done
+                if final.is_dir() and not final.is_symlink():
+                    raise ValueError(f"{final} is a folder; the output needs a file of that name there "
+                                     "(move the folder, or write to another -o)")
             umask = os.umask(0)
             os.umask(umask)
-            for tmp, final in self._pending:
-                os.chmod(tmp, 0o666 & ~umask)  # mkstemp made it private; give it what open() would
-                os.replace(tmp, final)
+            placed: list[Path] = []               # finals written so far
+            replaced: list[tuple[Path, Path]] = []  # (backup, final): the earlier files they replace
+            try:
+                for tmp, final in self._pending:
+                    os.chmod(tmp, 0o666 & ~umask)  # mkstemp made it private; give it what open() would
+                    if final.exists() or final.is_symlink():
+                        replaced.append((_moved_aside(final), final))
+                    try:
+                        os.replace(tmp, final)
+                    except OSError as e:
+                        raise OSError(e.errno, f"could not write {final}: {e.strerror}") from None
+                    placed.append(final)
+            except BaseException:
+                for final in placed:
+                    final.unlink(missing_ok=True)
+                for backup, final in reversed(replaced):
+                    os.replace(backup, final)
+                raise
+            for backup, _ in replaced:
+                backup.unlink(missing_ok=True)
             for stale in remove_after:
                 Path(stale).unlink(missing_ok=True)
             self._pending.clear()
@@ -71,6 +93,15 @@ class StagedOutput:
         if exc_type is not None:
             self.discard()
         return False
+
+
+def _moved_aside(final: Path) -> Path:
+    """Renames `final` (a file or a link) to a fresh name beside it, which it returns: a commit
+    that fails puts it back from there."""
+    fd, name = tempfile.mkstemp(prefix=f".{final.stem}.", suffix=f".old{final.suffix}", dir=final.parent)
+    os.close(fd)
+    os.replace(final, name)
+    return Path(name)
 
 
 @contextlib.contextmanager

@@ -74,7 +74,7 @@ def _check_las(info: dict) -> None:
            "a list of extra-bytes fields (name, type, description, scales, offsets)")
     for key in ("vlrs", "evlrs"):
         _check(info, key, lambda v: _list_of(v, dict) and all(map(_vlr, v)),
-               "a list of records (user_id, record_id, description, data bytes)")
+               "a list of records (user_id of up to 16 bytes, record_id, description of up to 32 bytes, data bytes)")
 
 
 def _check(info: dict, key: str, test, expected: str) -> None:
@@ -120,5 +120,7 @@ def _extra_dimension(d: dict) -> bool:
 
 
 def _vlr(v: dict) -> bool:
-    return (isinstance(v.get("user_id"), str) and _integer(v.get("record_id"), 0, 65535)
-            and isinstance(v.get("description", ""), str) and isinstance(v.get("data"), bytes))
+    # A LAS record header holds 16 bytes of user id and 32 of description: a longer text would be cut.
+    return (isinstance(v.get("user_id"), str) and len(v["user_id"].encode("utf-8", "replace")) <= 16
+            and _integer(v.get("record_id"), 0, 65535) and isinstance(v.get("description", ""), str)
+            and len(v.get("description", "").encode("utf-8", "replace")) <= 32 and isinstance(v.get("data"), bytes))

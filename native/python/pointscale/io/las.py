@@ -217,6 +217,10 @@ def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy):
             column = column.astype(np.float32)
         if name in declared:
             d = declared[name]
+            if not _declared_type_holds(column, d):
+                raise ValueError(f"attribute {name!r} ({column.dtype}) does not fit the LAS extra-bytes type "
+                                 f"{d['type']!r} its format details declare: its values would change. "
+                                 "Write it without those format details, or to a format that keeps it (.ply)")
             params.append(laspy.ExtraBytesParams(name=name, type=d["type"], description=d.get("description", ""),
                                                  scales=d.get("scales"), offsets=d.get("offsets")))
             values[name] = column
@@ -233,6 +237,25 @@ def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy):
             raise ValueError(f"attribute {p.name!r} is longer than the 32 bytes a LAS extra-bytes name holds: "
                              "rename it, or write a format that keeps it (.ply)")
     return values, params
+
+
+def _declared_type_holds(column: np.ndarray, declared: dict) -> bool:
+    """Whether an extra-bytes field of the declared type ("u1", "3f8"...; scales and offsets
+    optional) keeps column's values: unchanged by the type where unscaled, within its range
+    where scaled."""
+    kind = np.dtype(declared["type"].lstrip("123"))
+    if column.dtype.kind not in "biuf":
+        return False
+    if declared.get("scales") is not None or declared.get("offsets") is not None:
+        scales = np.asarray(declared.get("scales") or [1.0], float)
+        offsets = np.asarray(declared.get("offsets") or [0.0], float)
+        with np.errstate(all="ignore"):
+            raw = (column - offsets) / scales
+        limits = np.iinfo(kind) if kind.kind in "iu" else np.finfo(kind)
+        return bool(np.all(np.isfinite(raw)) and raw.min(initial=0) >= limits.min and raw.max(initial=0) <= limits.max)
+    with np.errstate(all="ignore"):
+        back = column.astype(kind).astype(column.dtype)
+    return bool(np.array_equal(back, column, equal_nan=column.dtype.kind == "f"))
 
 
 def _fits(column: np.ndarray, dimension) -> bool:

@@ -103,6 +103,9 @@ def _scan_of(ply: PlyData, path: str) -> Scan:
     props = {p.name: p for p in vertex.properties}
     if not set(COORDINATES) <= set(props):
         raise ValueError(f"{path}: vertices have no x, y, z properties")
+    listed = [c for c in COORDINATES if isinstance(props[c], PlyListProperty)]
+    if listed:
+        raise ValueError(f"{path}: vertex property {listed[0]} is a list; x, y and z must be one number each")
     if vertex.count == 0:
         raise ValueError(f"{path}: no vertices")
     data = vertex.data

@@ -87,8 +87,10 @@ class Scan:
     # -- flat-array form, for np.savez / np.load(allow_pickle=False) ------------------------------
 
     def to_arrays(self) -> dict:
-        """Everything but points and normals as name -> plain numpy array (numeric, or uint8 for
-        JSON text and raw bytes; never an object array), for `np.savez(file, **scan.to_arrays())`."""
+        """Everything but the points as name -> plain numpy array (numeric, or uint8 for JSON
+        text and raw bytes; never an object array), for `np.savez(file, **scan.to_arrays())`.
+        The normals, where the scan has them, are kept too: they are the input's own, which no
+        computed normals replace."""
         blobs: list[bytes] = []
         meta = {"n_points": self.n_points, "precision": self.precision.str,
                 "format_info": _bytes_to_refs(self.format_info, blobs),
@@ -108,6 +110,8 @@ class Scan:
                 arrays[f"{_FACE_PREFIX}{i}{_OFFSETS}"] = np.cumsum([0] + [len(v) for v in values]).astype(np.int64)
             else:
                 arrays[f"{_FACE_PREFIX}{i}"] = values
+        if self.normals is not None:
+            arrays["normals"] = np.asarray(self.normals, dtype=np.float64)
         # Indices as int32 when they fit: half the size on disk; from_arrays widens them again.
         index = np.int32 if self.n_points <= np.iinfo(np.int32).max else np.int64
         if isinstance(self.faces, np.ndarray):
@@ -121,6 +125,7 @@ class Scan:
     def from_arrays(cls, arrays, points=None, normals=None) -> "Scan":
         """The Scan that to_arrays gave, from that dict or from an .npz file (a path, opened with
         allow_pickle=False). Points are (n, 3) NaN unless given: call with_geometry before writing.
+        Normals are the ones given, else those the arrays keep, else None.
         Raises ValueError for anything missing, damaged or not plain numbers."""
         if isinstance(arrays, (str, os.PathLike)):
             try:
@@ -174,7 +179,7 @@ def _check_archive(loaded) -> None:
 
 def _entry_names(vertex_count: int, face_count: int) -> set:
     """The entries a Scan's flat-array form may hold besides its format bytes."""
-    names = {_META_KEY, "faces", "faces_flat", "faces_offsets"}
+    names = {_META_KEY, "faces", "faces_flat", "faces_offsets", "normals"}
     names |= {f"{_VERTEX_PREFIX}{i}" for i in range(vertex_count)}
     names |= {f"{_FACE_PREFIX}{i}{suffix}" for i in range(face_count) for suffix in ("", _OFFSETS)}
     return names
@@ -220,6 +225,10 @@ def _from_arrays(cls, arrays: dict, points, normals) -> Scan:
         faces = np.split(flat.astype(np.int64), offsets[1:-1])
     if points is None:
         points = np.full((n, 3), np.nan)
+    if normals is None and "normals" in arrays:
+        normals = arrays["normals"]  # checked by Scan as a normals array of n rows
+        if normals.dtype.kind != "f" or not np.isfinite(normals).all():
+            raise ValueError("scan arrays: normals must be finite floating-point numbers")
     try:
         info = _refs_to_bytes(info, blobs)
         check_format_info(info, n)  # anyone may have edited the file: the writers trust these values
