@@ -183,3 +183,48 @@ def test_normals_set_aside_by_estimate_normals_are_not_written_back(tmp_path):
     finest = ps.io.read(tmp_path / "d" / "level_2.ply").normals.astype(np.float32)
     assert not np.array_equal(finest, given)
     assert "normals" not in np.load(tmp_path / "d" / "source.npz").files
+
+
+def ply_with_header_text(path, text: bool, comment: bytes, faces=None):
+    """A PLY whose header has `comment` as raw bytes (plyfile itself writes ASCII only)."""
+    p = ps.shapes.bumpy_sphere(500)
+    v = np.empty(len(p), dtype=[(c, "f8") for c in "xyz"])
+    v["x"], v["y"], v["z"] = p.T
+    elements = [PlyElement.describe(v, "vertex")]
+    if faces is not None:
+        f = np.empty(len(faces), dtype=[("vertex_indices", object)])
+        f["vertex_indices"] = [np.asarray(x, dtype="i4") for x in faces]
+        elements.append(PlyElement.describe(f, "face"))
+    PlyData(elements, text=text, comments=["X" * len(comment)], obj_info=["Y" * len(comment)]).write(str(path))
+    raw = path.read_bytes()
+    raw = raw.replace(b"comment " + b"X" * len(comment), b"comment " + comment, 1)
+    path.write_bytes(raw.replace(b"obj_info " + b"Y" * len(comment), b"obj_info " + comment, 1))
+    return p
+
+
+@pytest.mark.parametrize("text", [False, True])
+@pytest.mark.parametrize("comment, shown", [("café Zürich".encode(), "café Zürich"),
+                                            ("Zürich".encode("latin-1"), "Zürich")])
+@pytest.mark.parametrize("polygons", [False, True])
+def test_comments_beyond_ascii_are_read_and_written_back(tmp_path, text, comment, shown, polygons):
+    """MeshLab writes a texture's file name into a comment as it is. Before: 'not a readable PLY
+    file (UnicodeDecodeError ...)'. Mixed triangles and quads take plyfile's own writer."""
+    faces = [[0, 1, 2], [2, 3, 4, 5]] if polygons else None
+    points = ply_with_header_text(tmp_path / "in.ply", text, comment, faces)
+    scan = ps.io.read(tmp_path / "in.ply")
+    assert scan.format_info["comments"] == [shown] and scan.format_info["obj_info"] == [shown]
+    assert np.array_equal(scan.points, points)
+    ps.io.write(tmp_path / "out.ply", scan)
+    again = ps.io.read(tmp_path / "out.ply")
+    assert again.format_info["comments"] == [shown] and np.array_equal(again.points, points)
+    assert (b"comment " + shown.encode("utf-8")) in (tmp_path / "out.ply").read_bytes()[:400]
+    if polygons:
+        assert [list(f) for f in again.faces] == faces
+
+
+def test_bytes_beyond_ascii_outside_a_comment_are_a_damaged_header(tmp_path):
+    ply_with_header_text(tmp_path / "in.ply", True, b"ok")
+    raw = (tmp_path / "in.ply").read_bytes().replace(b"property double z", "property double é".encode())
+    (tmp_path / "in.ply").write_bytes(raw)
+    with pytest.raises(ValueError, match="in.ply: PLY header line .* is not ASCII text"):
+        ps.io.read(tmp_path / "in.ply")

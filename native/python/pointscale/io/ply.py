@@ -15,6 +15,7 @@ from plyfile import PlyData, PlyElement, PlyListProperty
 
 from .atomic import atomic_write
 from .ply_ascii import read_ascii, write_ascii
+from .ply_header_text import HeaderAsAscii, ascii_stand_in, non_ascii_header, write_true_header
 from .text_tables import IntegerOutOfRange
 from .scan import Scan
 
@@ -33,11 +34,14 @@ def read_ply(path) -> Scan:
     """Reads a binary or ASCII PLY file into a Scan; ValueError naming the file if it is
     missing, damaged, or has no usable vertices."""
     path = os.fspath(path)
-    ply = _parse(path)
+    ply, text = _parse(path)
     try:
-        return _scan_of(ply, path)
+        scan = _scan_of(ply, path)
     except (KeyError, TypeError, IndexError) as exc:
         raise ValueError(f"{path}: malformed PLY ({exc})") from None
+    if text is not None:  # comments beyond ASCII, which plyfile held as stand-ins
+        scan.format_info["comments"], scan.format_info["obj_info"] = text[1], text[2]
+    return scan
 
 
 def write_ply(path, scan: Scan, binary: bool | None = None) -> None:
@@ -51,8 +55,9 @@ def write_ply(path, scan: Scan, binary: bool | None = None) -> None:
     elements = [_vertex_element(scan, info)]
     if scan.n_faces:
         elements.append(_face_element(scan, info))
+    comments, obj_info = list(info.get("comments", [])), list(info.get("obj_info", []))
     ply = PlyData([e for e, _, _ in elements], text=text, byte_order=byte_order,
-                  comments=list(info.get("comments", [])), obj_info=list(info.get("obj_info", [])))
+                  comments=[ascii_stand_in(c) for c in comments], obj_info=[ascii_stand_in(c) for c in obj_info])
     with atomic_write(path) as temporary:
         if text:
             write_ascii(temporary, ply, [columns for _, _, columns in elements])
@@ -63,28 +68,35 @@ def write_ply(path, scan: Scan, binary: bool | None = None) -> None:
                 f.write(ply.header.encode("ascii") + b"\n")
                 for _, packed, _ in elements:
                     f.write(packed(byte_order).data)
+        write_true_header(temporary, ply, comments, obj_info)
 
 
 # -- reading ----------------------------------------------------------------------------------
 
-def _parse(path: str) -> PlyData:
+def _parse(path: str):
+    """(PlyData, non_ascii_header(path)) of the file."""
     if not os.path.isfile(path):
         raise ValueError(f"no such file: {path}")
     try:
         fast = read_ascii(path)
     except IntegerOutOfRange as exc:
         raise ValueError(f"{path}: {exc}") from None
+    text = non_ascii_header(path)  # comments beyond ASCII (ply_header_text.py), or None
     if fast is not None:
-        return fast
+        return fast, text
     try:
-        for fixed in _FIXED_LISTS:
+        for fixed in [*_FIXED_LISTS, None]:
+            # Mixed polygons are read by the general parser (fixed None); a damaged file fails
+            # there again, and this time its error is reported.
             try:
-                return PlyData.read(path, known_list_len=fixed)
+                if text is None:
+                    return PlyData.read(path, known_list_len=fixed or {}), None
+                with HeaderAsAscii(path, text[0]) as stream:
+                    return PlyData.read(stream, known_list_len=fixed or {}), text
             except Exception:
-                pass  # not all triangles (quads), or a damaged file: try the next reading
-        # Mixed polygons are read by the general parser; a damaged file fails here again, and
-        # this time its error is reported.
-        return PlyData.read(path)
+                if fixed is None:
+                    raise
+                # not all triangles (quads), or a damaged file: try the next reading
     except MemoryError:
         raise ValueError(f"{path}: damaged PLY header (element counts too large)") from None
     except Exception as exc:  # plyfile raises PlyParseError, ValueError, struct/IndexError...

@@ -13,6 +13,7 @@ import warnings
 import numpy as np
 from plyfile import PlyData, PlyElement, PlyListProperty, PlyProperty
 
+from .ply_header_text import ascii_stand_in, header_line_text
 from .text_tables import IntegerOutOfRange, check_integer_range, write_rows
 
 _MAX_HEADER_LINES, _MAX_HEADER_LINE = 100_000, 100_000
@@ -30,7 +31,7 @@ def read_ascii(path: str) -> PlyData | None:
                 line = f.readline(_MAX_HEADER_LINE)
                 if not line or line.strip() == b"end_header":
                     break
-                header.append(line.decode("ascii"))
+                header.append(header_line_text(line, len(header) + 1, path))
                 if len(header) == 2 and not line.startswith(b"format ascii"):
                     return None  # binary: plyfile memory-maps it
             else:
@@ -71,7 +72,9 @@ def read_ascii(path: str) -> PlyData | None:
         raise  # plyfile's parser would wrap the value into its type
     except (OSError, UnicodeDecodeError, ValueError):
         return None  # a malformed row: plyfile's parser names it
-    return PlyData(out, text=True, byte_order="=", comments=comments, obj_info=obj_info)
+    # plyfile holds ASCII comments only: the text beyond it is read apart (ply_header_text.py)
+    return PlyData(out, text=True, byte_order="=", comments=[ascii_stand_in(c) for c in comments],
+                   obj_info=[ascii_stand_in(c) for c in obj_info])
 
 
 def write_ascii(path, ply: PlyData, columns: list[dict]) -> None:
@@ -93,7 +96,7 @@ def write_ascii(path, ply: PlyData, columns: list[dict]) -> None:
             parts.append(values.reshape(len(values), -1))
             formats += [_format(values.dtype)] * parts[-1].shape[1]
         write_rows(buffer, np.column_stack(parts) if len(parts) > 1 else parts[0], " ".join(formats))
-    with open(path, "w", encoding="ascii", newline="\n") as f:
+    with open(path, "w", encoding="utf-8", newline="\n") as f:  # the rows are ASCII; comments may not be
         f.write(buffer.getvalue())
 
 
