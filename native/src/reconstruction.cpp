@@ -11,6 +11,7 @@
 
 #include "pointscale/parallel.h"
 #include "pointscale/detail/level_normals.h"
+#include "pointscale/detail/mirrored_edit.h"
 #include "pointscale/detail/transported_rotations.h"
 #include "pointscale/detail/reconstruct_levels.h"
 
@@ -180,6 +181,11 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   // edited ones. Their normals, turned, are the edited levels' normals; with nothing edited
   // every turn is exactly the identity and the result is bit for bit the unedited one.
   const bool turned = edited && upto > 0;
+  // The parts the edit mirrors are built mirrored once more, a proper edit of the stored base,
+  // and mirrored back on the way out (mirrored_edit.h).
+  const std::vector<unsigned char> mirrored =
+      turned ? mirrored_points(model.base, p, model.parts, ws.edit->mirror_sample) : std::vector<unsigned char>();
+  reflect_rows(p, mirrored);
   std::vector<Mat3> clusters;
   if (turned) clusters = transported_rotations(model.base, p, model.support[0]);
   Points& fitted = turned ? ws.unedited : p;  // the level each level's normals are fitted to
@@ -220,6 +226,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
         ws.last.base = std::move(given);
         ws.last.result = p;
         ws.last.clusters = std::move(clusters);
+        reflect_rows(p, mirrored);
         stage.report(1.0);
         return report;
       }
@@ -291,6 +298,11 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
     ws.last.clusters = std::move(clusters);
   }
   if (turned) Points().swap(ws.unedited);  // only fitting the normals needs it
+  reflect_rows(p, mirrored);
+  if (kept && !mirrored.empty()) {
+    for (Points& level : kept->levels) reflect_rows(level, mirrored);
+    for (Points& n : kept->normals) reflect_rows(n, mirrored);
+  }
   return report;
 }
 
@@ -300,6 +312,7 @@ EditSupport edit_support(const Points& base, const IndexList& parts, const Point
   edit.ring_size = ring_size_for(base.rows(), edit_ring_size);
   edit.planes = ring_planes(base, edit.rings, edit.ring_size);
   edit.feet = base_feet(base, base_normals, finest, edit.rings, edit.ring_size);
+  edit.mirror_sample = mirror_sample(base, parts);
   return edit;
 }
 

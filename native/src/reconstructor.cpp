@@ -63,12 +63,14 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) : state_(std::make_un
   model_.base.resize(n, 3);
   model_.base_normals.resize(n, 3);
   model_.details.resize(k, n);
+  if (!model.parts.empty()) model_.parts.resize(static_cast<std::size_t>(n));  // read by mirrored_points
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
     for (std::size_t r = b; r < e; ++r) {
       const Eigen::Index i = order_[r], row = static_cast<Eigen::Index>(r);
       model_.base.row(row) = model.base.row(i);
       model_.base_normals.row(row) = model.base_normals.row(i);
       model_.details.col(row) = model.details.col(i);
+      if (!model.parts.empty()) model_.parts[r] = model.parts[static_cast<std::size_t>(i)];
     }
   }, {}, 4096);
 
@@ -120,6 +122,8 @@ void Reconstructor::State::find_edit_support(const ProgressStage& progress) {
   to.planes.normals.resize(from.planes.normals.size());
   to.planes.kind.resize(from.planes.kind.size());
   to.planes.in_plane.resize(from.planes.in_plane.size());
+  to.mirror_sample.resize(from.mirror_sample.size());  // in its own order: the same sums
+  for (std::size_t k = 0; k < from.mirror_sample.size(); ++k) to.mirror_sample[k] = rank[from.mirror_sample[k]];
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
     for (std::size_t r = b; r < e; ++r) {
       const std::size_t i = static_cast<std::size_t>(order[r]);

@@ -167,3 +167,21 @@ def test_rebuild_and_bake_share_one_kept_reconstructor():
 
     writeback.forget_all()  # a new file: the engine object and its solver are made again
     assert not writeback._solvers
+
+
+def test_a_mirrored_level_0_rebuilds_the_mirrored_model():
+    """A scale of -1 on Level 0 (x to -x): the detail is mirrored with it and stays outside.
+    Before, the turns (rotations only) read the mirrored base as turned over and put most of
+    the detail on the inside."""
+    obj = h.mesh_object(h.noisy_sphere(8000), name="Mirrored")
+    h.decompose(obj, levels=4)
+    me = obj.data
+    original = h.key(me, "Basis").astype(np.float64)
+    assert bpy.ops.pointscale.edit_base(mode="OBJECT") == {"FINISHED"}
+    base = h.key(me, "Level 0").astype(np.float64)
+    h.set_key(me, "Level 0", base * np.array([-1.0, 1.0, 1.0]))
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    result = h.key(me, "Multiscale Edit").astype(np.float64)
+    size = np.ptp(original, axis=0).max()
+    # The keys are single precision: measured within rounding of float32 coordinates.
+    assert np.abs(result - original * np.array([-1.0, 1.0, 1.0])).max() < 1e-5 * size
