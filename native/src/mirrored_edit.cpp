@@ -3,121 +3,82 @@
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <algorithm>
-#include <cmath>
-#include <cstdint>
-#include <cstring>
 
 #include "pointscale/parallel.h"
+#include "pointscale/detail/level_normals.h"
 
 namespace pointscale {
 
 namespace {
 
-// Sums over one part's points, in point order (one thread, so that the decision never
-// depends on how a sum was split).
-struct PartSums {
+// A part's votes, and sums over its anchors for a part too flat to vote.
+struct PartTally {
+  std::size_t clusters = 0, decided = 0, against = 0;
   Vec3 original = Vec3::Zero(), edited = Vec3::Zero();
-  Mat3 cross = Mat3::Zero();  // sum (o - o_mean)(e - e_mean)^T
-  double spread_original = 0.0, spread_edited = 0.0;  // sum |o - o_mean|^2, sum |e - e_mean|^2
-  double count = 0.0;
+  Mat3 cross = Mat3::Zero();  // sum (o - o_mean)(e - e_mean)^T over the anchors
+  double spread_original = 0.0, spread_edited = 0.0;
 };
 
-// Whether the part's best similarity (a turn and a uniform scale) fits the edit at least four
-// times worse than its best mirror-similarity (Kabsch with and without a reflection): with
-// the singular values s1 >= s2 >= s3 of the cross sums, the two fit to within
-// E - (s1 + s2 - s3)^2 / O and E - (s1 + s2 + s3)^2 / O where the best orthogonal map
-// reverses orientation. A part that is flat (s3 = 0), or an edit that bends it far from any
-// similarity (a lift on a plane), fits both alike: it counts as not mirrored.
-bool mirrors(const PartSums& s) {
-  if (s.count < 4.0 || !(s.spread_original > 0.0)) return false;
-  const Eigen::JacobiSVD<Mat3> svd(s.cross, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  if (!((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0)) return false;
+// A part whose clusters mostly cannot tell (a nearly flat one, such as a plate or a plane of
+// handles): mirrored when its best similarity with a mirror (Kabsch over the anchors: a turn, a
+// uniform scale and a mirror) fits the edit at least four times better than its best similarity
+// without one, which fits clearly worse than rounding. With the singular values s1 >= s2 >= s3
+// of the cross sums, where the best orthogonal map reverses orientation, they fit to within
+// E - (s1 + s2 + s3)^2 / O and E - (s1 + s2 - s3)^2 / O. A lift fits both alike; a flat part
+// (s3 = 0) has no orientation at all.
+bool mirrored_as_a_whole(const PartTally& t) {
+  if (t.clusters < 4 || !(t.spread_original > 0.0) || !(t.cross.determinant() < 0.0)) return false;
+  const Eigen::JacobiSVD<Mat3> svd(t.cross);
   const Vec3 sv = svd.singularValues();
+  if (!(sv(2) > 1e-9 * sv(0))) return false;
   const double mirror = sv(0) + sv(1) + sv(2), turn = sv(0) + sv(1) - sv(2);
-  const double misfit_mirror = s.spread_edited - mirror * mirror / s.spread_original;
-  const double misfit_turn = s.spread_edited - turn * turn / s.spread_original;
-  return misfit_mirror < 0.25 * misfit_turn;
-}
-
-// How many points of a part the fits read, about: a sample. A mirror fits it exactly, and
-// anything else fits far from four times better, so a sample decides as the whole part would,
-// at a cost that does not grow with the model (a brush dab in an editing session redoes only a
-// few thousand points).
-constexpr double sampled_points = 4096.0;
-
-// A point's place in the sample, from its stored base position alone, so that the same points
-// are sampled in any point order.
-std::uint64_t position_hash(const Points& original, Eigen::Index i) {
-  std::uint64_t h = 0x9e3779b97f4a7c15ull;
-  for (int a = 0; a < 3; ++a) {
-    std::uint64_t bits;
-    const double v = original(i, a) == 0.0 ? 0.0 : original(i, a);  // -0 and +0 alike
-    std::memcpy(&bits, &v, sizeof bits);
-    h ^= bits + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
-    h ^= h >> 31;
-    h *= 0xbf58476d1ce4e5b9ull;
-    h ^= h >> 29;
-  }
-  return h;
-}
-
-// The sums of each part over its sample, with the cross sums about the sample's centroids, in
-// the sample's order.
-std::vector<PartSums> part_sums(const Points& original, const Points& edited, const IndexList& parts,
-                                const IndexList& sample) {
-  auto part_of = [&](Index i) { return parts.empty() ? std::size_t(0) : static_cast<std::size_t>(parts[static_cast<std::size_t>(i)]); };
-  Index labels = 1;
-  for (Index p : parts) labels = std::max(labels, p + 1);
-  std::vector<PartSums> sums(static_cast<std::size_t>(labels));
-  for (Index i : sample) {
-    PartSums& s = sums[part_of(i)];
-    s.original += original.row(i).transpose();
-    s.edited += edited.row(i).transpose();
-    s.count += 1.0;
-  }
-  for (PartSums& s : sums)
-    if (s.count > 0.0) { s.original /= s.count; s.edited /= s.count; }
-  for (Index i : sample) {
-    PartSums& s = sums[part_of(i)];
-    const Vec3 o = original.row(i).transpose() - s.original, e = edited.row(i).transpose() - s.edited;
-    s.cross.noalias() += o * e.transpose();
-    s.spread_original += o.squaredNorm();
-    s.spread_edited += e.squaredNorm();
-  }
-  return sums;
+  const double misfit_mirror = t.spread_edited - mirror * mirror / t.spread_original;
+  const double misfit_turn = t.spread_edited - turn * turn / t.spread_original;
+  return misfit_turn > 1e-9 * t.spread_edited && misfit_mirror < 0.25 * misfit_turn;
 }
 
 }  // namespace
 
-IndexList mirror_sample(const Points& original, const IndexList& parts) {
-  const std::size_t n = static_cast<std::size_t>(original.rows());
+std::vector<unsigned char> mirrored_points(const Points& original, const Points& edited, const LevelSupport& level0,
+                                           const IndexList& parts, const std::vector<signed char>& vote) {
+  const Points b0 = support_centroids(original, level0);
+  const Points b1 = support_centroids(edited, level0);
+  // Each part's tally, by its clusters' anchors, in cluster order (the same in any point order).
   Index labels = 1;
   for (Index p : parts) labels = std::max(labels, p + 1);
-  std::vector<std::size_t> size(static_cast<std::size_t>(labels), 0);
-  if (parts.empty()) size[0] = n;
-  else
-    for (Index p : parts) ++size[static_cast<std::size_t>(p)];
-  std::vector<std::uint64_t> step(size.size());
-  for (std::size_t p = 0; p < size.size(); ++p)
-    step[p] = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::ceil(static_cast<double>(size[p]) / sampled_points)));
-  std::vector<std::pair<std::uint64_t, Index>> chosen;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint64_t h = position_hash(original, static_cast<Eigen::Index>(i));
-    if (h % step[parts.empty() ? 0 : static_cast<std::size_t>(parts[i])] == 0) chosen.push_back({h, static_cast<Index>(i)});
+  std::vector<PartTally> tally(static_cast<std::size_t>(labels));
+  auto part_of = [&](std::size_t c) {
+    return parts.empty() ? std::size_t(0) : static_cast<std::size_t>(parts[static_cast<std::size_t>(level0.anchors[c])]);
+  };
+  for (std::size_t c = 0; c < vote.size(); ++c) {
+    PartTally& t = tally[part_of(c)];
+    ++t.clusters;
+    t.original += b0.row(static_cast<Eigen::Index>(c)).transpose();
+    t.edited += b1.row(static_cast<Eigen::Index>(c)).transpose();
+    if (vote[c] == 0) continue;
+    ++t.decided;
+    if (vote[c] < 0) ++t.against;
   }
-  // In the order of the hashes, ties (duplicated positions) by their point order.
-  std::sort(chosen.begin(), chosen.end());
-  IndexList sample(chosen.size());
-  for (std::size_t k = 0; k < chosen.size(); ++k) sample[k] = chosen[k].second;
-  return sample;
-}
-
-std::vector<unsigned char> mirrored_points(const Points& original, const Points& edited, const IndexList& parts,
-                                           const IndexList& sample) {
-  const std::vector<PartSums> sums = part_sums(original, edited, parts, sample);
-  std::vector<unsigned char> part_mirrored(sums.size());
+  for (PartTally& t : tally)
+    if (t.clusters > 0) { t.original /= static_cast<double>(t.clusters); t.edited /= static_cast<double>(t.clusters); }
+  for (std::size_t c = 0; c < vote.size(); ++c) {
+    PartTally& t = tally[part_of(c)];
+    const Vec3 o = b0.row(static_cast<Eigen::Index>(c)).transpose() - t.original;
+    const Vec3 e = b1.row(static_cast<Eigen::Index>(c)).transpose() - t.edited;
+    t.cross.noalias() += o * e.transpose();
+    t.spread_original += o.squaredNorm();
+    t.spread_edited += e.squaredNorm();
+  }
+  // A part votes where at least 4 of its clusters, and a quarter of them, can tell: mirrored when
+  // three quarters of those say reversed. Otherwise it is judged as a whole.
+  std::vector<unsigned char> part_mirrored(tally.size(), 0);
   bool any = false;
-  for (std::size_t p = 0; p < sums.size(); ++p) any |= (part_mirrored[p] = mirrors(sums[p]) ? 1 : 0) != 0;
+  for (std::size_t p = 0; p < tally.size(); ++p) {
+    const PartTally& t = tally[p];
+    const bool votes = t.decided >= 4 && 4 * t.decided >= t.clusters;
+    part_mirrored[p] = votes ? 4 * t.against >= 3 * t.decided : mirrored_as_a_whole(t);
+    any |= part_mirrored[p] != 0;
+  }
   if (!any) return {};
   std::vector<unsigned char> flags(static_cast<std::size_t>(original.rows()));
   for (std::size_t i = 0; i < flags.size(); ++i) flags[i] = part_mirrored[parts.empty() ? 0 : static_cast<std::size_t>(parts[i])];

@@ -182,12 +182,18 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   // every turn is exactly the identity and the result is bit for bit the unedited one.
   const bool turned = edited && upto > 0;
   // The parts the edit mirrors are built mirrored once more, a proper edit of the stored base,
-  // and mirrored back on the way out (mirrored_edit.h).
-  const std::vector<unsigned char> mirrored =
-      turned ? mirrored_points(model.base, p, model.parts, ws.edit->mirror_sample) : std::vector<unsigned char>();
-  reflect_rows(p, mirrored);
+  // and mirrored back on the way out (mirrored_edit.h); their clusters' turns are then found again.
   std::vector<Mat3> clusters;
-  if (turned) clusters = transported_rotations(model.base, p, model.support[0]);
+  std::vector<unsigned char> mirrored;
+  if (turned) {
+    std::vector<signed char> orientation;
+    clusters = transported_rotations(model.base, p, model.support[0], &orientation);
+    mirrored = mirrored_points(model.base, p, model.support[0], model.parts, orientation);
+    if (!mirrored.empty()) {
+      reflect_rows(p, mirrored);
+      clusters = transported_rotations(model.base, p, model.support[0]);
+    }
+  }
   Points& fitted = turned ? ws.unedited : p;  // the level each level's normals are fitted to
   // Normals fitted once for these gains are reused (they do not depend on the edit): kept
   // between calls by a Reconstructor, or handed over by the unedited pass before this one.
@@ -312,7 +318,6 @@ EditSupport edit_support(const Points& base, const IndexList& parts, const Point
   edit.ring_size = ring_size_for(base.rows(), edit_ring_size);
   edit.planes = ring_planes(base, edit.rings, edit.ring_size);
   edit.feet = base_feet(base, base_normals, finest, edit.rings, edit.ring_size);
-  edit.mirror_sample = mirror_sample(base, parts);
   return edit;
 }
 

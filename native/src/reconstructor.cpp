@@ -122,8 +122,6 @@ void Reconstructor::State::find_edit_support(const ProgressStage& progress) {
   to.planes.normals.resize(from.planes.normals.size());
   to.planes.kind.resize(from.planes.kind.size());
   to.planes.in_plane.resize(from.planes.in_plane.size());
-  to.mirror_sample.resize(from.mirror_sample.size());  // in its own order: the same sums
-  for (std::size_t k = 0; k < from.mirror_sample.size(); ++k) to.mirror_sample[k] = rank[from.mirror_sample[k]];
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
     for (std::size_t r = b; r < e; ++r) {
       const std::size_t i = static_cast<std::size_t>(order[r]);

@@ -9,13 +9,15 @@
 
 namespace pointscale {
 
-std::vector<Mat3> transported_rotations(const Points& original, const Points& edited, const LevelSupport& support) {
+std::vector<Mat3> transported_rotations(const Points& original, const Points& edited, const LevelSupport& support,
+                                        std::vector<signed char>* orientation) {
   const Points b0 = support_centroids(original, support);
   const Points b1 = support_centroids(edited, support);
   const int k = support.neighbors;
   // The rotation that best maps each cluster's neighbourhood from the original to the edited
   // level (Kabsch). Unedited it is the identity, so the references are the stored normals.
   std::vector<Mat3> rotation(static_cast<std::size_t>(support.clusters));
+  if (orientation) orientation->assign(rotation.size(), 0);
   parallel_for(rotation.size(), [&](std::size_t b, std::size_t e) {
     for (std::size_t cc = b; cc < e; ++cc) {
       const Index c = static_cast<Index>(cc);
@@ -38,6 +40,7 @@ std::vector<Mat3> transported_rotations(const Points& original, const Points& ed
       if (!(s(1) > 1e-9 * s(0))) continue;
       Mat3 d = Mat3::Identity();
       d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+      if (orientation && s(2) >= 1e-2 * s(0)) (*orientation)[cc] = static_cast<signed char>(d(2, 2));
       rotation[cc] = svd.matrixV() * d * svd.matrixU().transpose();
     }
   }, {}, 64);  // small chunks: level 0 has few clusters, and large chunks would load the threads unevenly

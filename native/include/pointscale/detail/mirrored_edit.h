@@ -8,26 +8,28 @@
 #pragma once
 #include <vector>
 
+#include "pointscale/level_support.h"
 #include "pointscale/types.h"
 
 namespace pointscale {
 
-// Which points lie in a part the edit mirrors: the part's best mirror-similarity (a mirror,
-// a turn and a uniform scale, fitted about the centroids) fits the edited base at least four
-// times better than its best similarity without the mirror. A flat part has no such fit (a
-// mirror across its own plane moves it as a turn by 180 degrees does), nor has an edit far from
-// any similarity: such parts count as not mirrored.
-// original, edited  #P by 3; parts: #P part labels (connected_parts.h), or empty for one part
-// sample            mirror_sample(original, parts): the points the fits read
+// Which points lie in a part the edit mirrors. Each level-0 cluster's neighbourhood votes: the
+// edit keeps its orientation or reverses it (its best orthogonal map's determinant), or it
+// cannot tell (a nearly flat neighbourhood, or one the edit left alone). Orientation is local,
+// so a bend that rolls a part round on itself (whose best linear map as a whole can reverse)
+// keeps it, while a mirror with an uneven scale, or with a sculpted surface on it, reverses it;
+// a dent that turns a bulge inside out reverses a few clusters only. A part where at least 4
+// clusters and a quarter of them tell is mirrored when three quarters of those say reversed. A
+// part too flat for that (a plate, a plane of handles) is mirrored when its anchors fit a
+// mirror-similarity four times better than any similarity without the mirror: a lift fits both
+// alike, and a flat part has no orientation at all (a mirror across its own plane moves it as
+// a half turn does).
+// original, edited  #P by 3; level0: the model's level-0 support; parts: #P part labels
+// (connected_parts.h), or empty for one part; vote: the clusters' orientation votes, from
+// transported_rotations(original, edited, level0, &vote).
 // Returns #P flags (1: mirrored), or an empty list when no part is mirrored.
-std::vector<unsigned char> mirrored_points(const Points& original, const Points& edited, const IndexList& parts,
-                                           const IndexList& sample);
-
-// The points the fits read: about 4096 of each part, chosen by their stored positions alone,
-// so that the check costs no more on a large model. Found with the rest of what an edit needs
-// (EditSupport) and renumbered with it, so a model in another point order (a Reconstructor's)
-// sums the same points in the same order and decides alike, bit for bit.
-IndexList mirror_sample(const Points& original, const IndexList& parts);
+std::vector<unsigned char> mirrored_points(const Points& original, const Points& edited, const LevelSupport& level0,
+                                           const IndexList& parts, const std::vector<signed char>& vote);
 
 // The fixed reflection (x to -x) of the flagged rows of p, in place: its own inverse.
 void reflect_rows(Points& p, const std::vector<unsigned char>& flags);

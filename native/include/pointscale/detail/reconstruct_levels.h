@@ -17,7 +17,6 @@ struct EditSupport {
   int ring_size = 0;
   IndexList feet;         // #P, base_feet(base, base_normals, the finest level)
   EditRingPlanes planes;  // ring_planes(base, rings, ring_size)
-  IndexList mirror_sample;  // mirror_sample(base, parts) (detail/mirrored_edit.h)
 };
 
 // base, base_normals, finest  #P by 3: the model's base, its normals and its unedited finest

@@ -11,6 +11,12 @@ namespace pointscale {
 // plane, and to tell a ring that turned past 90 degrees from one that folded over. A
 // neighbourhood the edit left as it was gives exactly the identity.
 // original, edited  #P by 3. Returns #C rotations.
-std::vector<Mat3> transported_rotations(const Points& original, const Points& edited, const LevelSupport& support);
+// orientation: if given, receives #C votes of whether the edit keeps (+1) or reverses (-1) the
+// orientation of each cluster's neighbourhood (its best orthogonal map's determinant), or
+// cannot tell (0): the neighbourhood spreads across its plane by less than 1% of its spread
+// along it (a lift can turn the sign of its thinnest direction's fit there, and a mirror
+// across the plane moves it as a half turn does), or the edit left it alone (mirrored_edit.h).
+std::vector<Mat3> transported_rotations(const Points& original, const Points& edited, const LevelSupport& support,
+                                        std::vector<signed char>* orientation = nullptr);
 
 }  // namespace pointscale
