@@ -228,3 +228,75 @@ def test_bytes_beyond_ascii_outside_a_comment_are_a_damaged_header(tmp_path):
     (tmp_path / "in.ply").write_bytes(raw)
     with pytest.raises(ValueError, match="in.ply: PLY header line .* is not ASCII text"):
         ps.io.read(tmp_path / "in.ply")
+
+
+@pytest.mark.parametrize("newline", [b"\r", b"\r\n"])
+@pytest.mark.parametrize("comment", ["plain", "café", "not the end_header"])
+def test_headers_ending_lines_in_cr_or_crlf_keep_the_data_after_them(tmp_path, newline, comment):
+    """A reviewer's cases: a CR-only header was cut at the first LF in the binary data after it,
+    and an end_header inside a comment cut the header short. Bytes from 200 up right after the
+    header show that the data is read where it is."""
+    v = np.zeros(50, dtype=[("x", "f4"), ("y", "f4"), ("z", "f4"), ("q", "u1")])
+    rng = np.random.default_rng(1)
+    for c in "xyz":
+        v[c] = rng.normal(size=50)
+    v["q"] = 200 + np.arange(50) % 50
+    path = tmp_path / "in.ply"
+    PlyData([PlyElement.describe(v, "vertex")], comments=["X" * len(comment.encode())]).write(str(path))
+    raw = path.read_bytes()
+    end = raw.index(b"end_header\n") + len(b"end_header\n")
+    header = raw[:end].replace(b"X" * len(comment.encode()), comment.encode()).replace(b"\n", newline)
+    path.write_bytes(header + raw[end:])
+    scan = ps.io.read(path)
+    assert scan.format_info["comments"] == [comment]
+    assert np.array_equal(scan.vertex_attributes["q"], v["q"]) and np.array_equal(scan.points[:, 0], v["x"].astype(float))
+
+
+def test_scaled_extra_bytes_at_the_limit_of_their_type_are_written(tmp_path):
+    """(2.55 - 0) / 0.01 is 255.00000000000003: the range check must round as LAS stores."""
+    laspy = pytest.importorskip("laspy")
+    header = laspy.LasHeader(point_format=3, version="1.4")
+    header.add_extra_dim(laspy.ExtraBytesParams(name="level", type=np.uint8, scales=np.array([0.01]),
+                                                offsets=np.array([0.0])))
+    las = laspy.LasData(header)
+    p = ps.shapes.sphere(2000)
+    las.x, las.y, las.z = p.T
+    las.level = np.where(np.arange(2000) % 2 == 0, 0.0, 2.55)
+    las.write(str(tmp_path / "in.las"))
+    scan = ps.io.read(tmp_path / "in.las")
+    ps.io.write(tmp_path / "out.las", scan)
+    assert np.array_equal(laspy.read(str(tmp_path / "out.las")).points["level"], laspy.read(str(tmp_path / "in.las")).points["level"])
+
+
+def test_an_output_replaced_keeps_its_name_until_the_new_file_takes_it(tmp_path, monkeypatch):
+    """The earlier file gets a second name (a hard link) rather than being renamed away, so a
+    reader, or a crash, between the two steps still finds a whole file at its name."""
+    (tmp_path / "a.ply").write_text("old")
+    stage = staged_output.StagedOutput()
+    stage.temporary(tmp_path / "a.ply").write_text("new")
+    real, seen = os.replace, []
+
+    def replace(src, dst):
+        seen.append(os.path.exists(dst))
+        return real(src, dst)
+
+    monkeypatch.setattr(staged_output.os, "replace", replace)
+    stage.commit()
+    assert seen == [True] and (tmp_path / "a.ply").read_text() == "new"
+    assert os.listdir(tmp_path) == ["a.ply"]
+
+
+def test_an_output_that_cannot_be_set_aside_leaves_nothing_behind(tmp_path, monkeypatch):
+    (tmp_path / "a.ply").write_text("old")
+    stage = staged_output.StagedOutput()
+    stage.temporary(tmp_path / "a.ply").write_text("new")
+
+    def refuse(*args, **kwargs):
+        raise PermissionError(1, "Operation not permitted")
+
+    monkeypatch.setattr(staged_output.os, "link", refuse)
+    monkeypatch.setattr(staged_output.os, "replace", refuse)
+    with pytest.raises(PermissionError):
+        with stage:
+            stage.commit()
+    assert os.listdir(tmp_path) == ["a.ply"] and (tmp_path / "a.ply").read_text() == "old"

@@ -56,17 +56,14 @@ class StagedOutput:
                 for tmp, final in self._pending:
                     os.chmod(tmp, 0o666 & ~umask)  # mkstemp made it private; give it what open() would
                     if final.exists() or final.is_symlink():
-                        replaced.append((_moved_aside(final), final))
+                        replaced.append((_kept_aside(final), final))
                     try:
                         os.replace(tmp, final)
                     except OSError as e:
                         raise OSError(e.errno, f"could not write {final}: {e.strerror}") from None
                     placed.append(final)
             except BaseException:
-                for final in placed:
-                    final.unlink(missing_ok=True)
-                for backup, final in reversed(replaced):
-                    os.replace(backup, final)
+                _put_back(placed, replaced)
                 raise
             for backup, _ in replaced:
                 backup.unlink(missing_ok=True)
@@ -95,13 +92,42 @@ class StagedOutput:
         return False
 
 
-def _moved_aside(final: Path) -> Path:
-    """Renames `final` (a file or a link) to a fresh name beside it, which it returns: a commit
-    that fails puts it back from there."""
+def _kept_aside(final: Path) -> Path:
+    """A second name, beside it, for the file (or link) `final`, which it returns: a commit that
+    fails puts the file back from there. A hard link, so that `final` itself stays in place until
+    the new file replaces it in one step; where the file system has none, a rename."""
     fd, name = tempfile.mkstemp(prefix=f".{final.stem}.", suffix=f".old{final.suffix}", dir=final.parent)
     os.close(fd)
-    os.replace(final, name)
+    os.unlink(name)  # only its unused name is wanted
+    try:
+        os.link(final, name, follow_symlinks=False)
+    except (OSError, NotImplementedError):  # no hard links there, or none to a link itself
+        os.replace(final, name)
     return Path(name)
+
+
+def _put_back(placed: list[Path], replaced: list[tuple[Path, Path]]) -> None:
+    """Undoes a commit that failed midway: removes the files it placed, and puts back every file
+    they replaced, each on its own (one that cannot be put back does not keep the others from
+    it; the first such error is raised after all were tried)."""
+    errors = []
+    kept = {final for _, final in replaced}
+    for final in placed:
+        if final not in kept:
+            try:
+                final.unlink(missing_ok=True)
+            except OSError as e:
+                errors.append(e)
+    for backup, final in reversed(replaced):
+        try:
+            if final in placed or not (final.exists() or final.is_symlink()):
+                os.replace(backup, final)
+            else:  # not replaced yet: still the old file, of which backup is a second name
+                backup.unlink()
+        except OSError as e:
+            errors.append(e)
+    if errors:
+        raise errors[0]
 
 
 @contextlib.contextmanager

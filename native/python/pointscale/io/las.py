@@ -251,6 +251,8 @@ def _declared_type_holds(column: np.ndarray, declared: dict) -> bool:
         offsets = np.asarray(declared.get("offsets") or [0.0], float)
         with np.errstate(all="ignore"):
             raw = (column - offsets) / scales
+        if kind.kind in "iu":  # stored rounded: 2.55 at scale 0.01 is 255, not 255.00000000000003
+            raw = np.rint(raw)
         limits = np.iinfo(kind) if kind.kind in "iu" else np.finfo(kind)
         return bool(np.all(np.isfinite(raw)) and raw.min(initial=0) >= limits.min and raw.max(initial=0) <= limits.max)
     with np.errstate(all="ignore"):

@@ -31,31 +31,37 @@ def header_line_text(line: bytes, number: int, path) -> str:
 
 def non_ascii_header(path) -> tuple[int, list[str], list[str]] | None:
     """(the header's length in bytes, its comments, its obj_info lines) of a PLY file whose header
-    holds bytes beyond ASCII, or None for a header that is ASCII (or not found)."""
+    holds bytes beyond ASCII, or None for a header that is ASCII (or not found). Lines end as the
+    first one ("ply") does, in LF, CRLF or CR, as plyfile reads them; the header ends at the
+    line that is end_header."""
     with open(path, "rb") as f:
         head = f.read(1 << 16)
-        while b"end_header" not in head and len(head) < _MAX_HEADER:
+        if not head.startswith(b"ply"):
+            return None
+        newline = b"\r\n" if head[3:5] == b"\r\n" else head[3:4]
+        if newline not in (b"\n", b"\r", b"\r\n"):
+            return None
+        end = newline + b"end_header" + newline
+        while end not in head and len(head) < _MAX_HEADER:
             more = f.read(1 << 20)
             if not more:
                 break
             head += more
-    end = head.find(b"end_header")
-    if end < 0:
+    stop = head.find(end)
+    if stop < 0:
         return None
-    stop = head.find(b"\n", end)
-    stop = len(head) if stop < 0 else stop + 1
-    header = head[:stop]
+    header = head[:stop + len(end)]
     if header.isascii():
         return None
     comments, obj_info = [], []
-    for number, line in enumerate(header.splitlines(), start=1):
+    for number, line in enumerate(header[:-len(newline)].split(newline), start=1):
         text = header_line_text(line, number, path)
         words = text.split(None, 1)
         if words and words[0] == "comment":
             comments.append(text.strip()[len("comment"):].strip())
         elif words and words[0] == "obj_info":
             obj_info.append(text.strip()[len("obj_info"):].strip())
-    return stop, comments, obj_info
+    return len(header), comments, obj_info
 
 
 class HeaderAsAscii(io.FileIO):
