@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <cmath>
 
 #include "pointscale/parallel.h"
 #include "pointscale/detail/level_normals.h"
@@ -13,19 +14,20 @@ namespace {
 
 // A part's votes, and sums over its anchors for a part too flat to vote.
 struct PartTally {
-  std::size_t clusters = 0, decided = 0, against = 0;
+  std::size_t clusters = 0, decided = 0, against = 0, alone = 0;
   Vec3 original = Vec3::Zero(), edited = Vec3::Zero();
   Mat3 cross = Mat3::Zero();  // sum (o - o_mean)(e - e_mean)^T over the anchors
   double spread_original = 0.0, spread_edited = 0.0;
 };
 
 // A part whose clusters mostly cannot tell (a nearly flat one, such as a plate or a plane of
-// handles): mirrored when its best similarity with a mirror (Kabsch over the anchors: a turn, a
-// uniform scale and a mirror) fits the edit at least four times better than its best similarity
-// without one, which fits clearly worse than rounding. With the singular values s1 >= s2 >= s3
-// of the cross sums, where the best orthogonal map reverses orientation, they fit to within
-// E - (s1 + s2 + s3)^2 / O and E - (s1 + s2 - s3)^2 / O. A lift fits both alike; a flat part
-// (s3 = 0) has no orientation at all.
+// handles): mirrored when its anchors are, to within rounding (a mirror of the edited part's
+// anchors fits them to 1e-6 of their spread, while a turn with a uniform scale misses by more
+// than four times that and than rounding). With the singular values s1 >= s2 >= s3 of the cross
+// sums, where the best orthogonal map reverses orientation, the two fit to within
+// E - (s1 + s2 + s3)^2 / O and E - (s1 + s2 - s3)^2 / O. Only a mirror alone is told apart
+// there: a lift, a dimple pressed through the part's own plane or a brush on a mirrored plate
+// is not a mirror to within rounding, and a flat part (s3 = 0) has no orientation at all.
 bool mirrored_as_a_whole(const PartTally& t) {
   if (t.clusters < 4 || !(t.spread_original > 0.0) || !(t.cross.determinant() < 0.0)) return false;
   const Eigen::JacobiSVD<Mat3> svd(t.cross);
@@ -34,7 +36,7 @@ bool mirrored_as_a_whole(const PartTally& t) {
   const double mirror = sv(0) + sv(1) + sv(2), turn = sv(0) + sv(1) - sv(2);
   const double misfit_mirror = t.spread_edited - mirror * mirror / t.spread_original;
   const double misfit_turn = t.spread_edited - turn * turn / t.spread_original;
-  return misfit_turn > 1e-9 * t.spread_edited && misfit_mirror < 0.25 * misfit_turn;
+  return misfit_mirror <= 1e-6 * t.spread_edited && misfit_turn > 4.0 * std::max(misfit_mirror, 1e-9 * t.spread_edited);
 }
 
 }  // namespace
@@ -55,7 +57,8 @@ std::vector<unsigned char> mirrored_points(const Points& original, const Points&
     ++t.clusters;
     t.original += b0.row(static_cast<Eigen::Index>(c)).transpose();
     t.edited += b1.row(static_cast<Eigen::Index>(c)).transpose();
-    if (vote[c] == 0) continue;
+    if (vote[c] == 2) ++t.alone;
+    if (vote[c] != 1 && vote[c] != -1) continue;
     ++t.decided;
     if (vote[c] < 0) ++t.against;
   }
@@ -69,14 +72,22 @@ std::vector<unsigned char> mirrored_points(const Points& original, const Points&
     t.spread_original += o.squaredNorm();
     t.spread_edited += e.squaredNorm();
   }
-  // A part votes where at least 4 of its clusters, and a quarter of them, can tell: mirrored when
-  // three quarters of those say reversed. Otherwise it is judged as a whole.
+  // A mirror moves every cluster of the part and reverses every one that can tell. A part
+  // votes where its clusters' neighbourhoods are local (the part has at least three times as
+  // many clusters as a neighbourhood holds) and a quarter of them can tell: mirrored when nine
+  // in ten of those say reversed and the edit left at most one in twenty of all its clusters
+  // alone. So a dent that presses a cap through a plane, even most of the part, is not a mirror
+  // of the part: the rest stays as it was, or turns as a bend does. Otherwise (a nearly flat
+  // part, or one with a handful of clusters, each neighbourhood holding most of the part) it is
+  // judged as a whole.
   std::vector<unsigned char> part_mirrored(tally.size(), 0);
   bool any = false;
+  const std::size_t local = 3 * static_cast<std::size_t>(std::max(level0.neighbors, 1));
   for (std::size_t p = 0; p < tally.size(); ++p) {
     const PartTally& t = tally[p];
-    const bool votes = t.decided >= 4 && 4 * t.decided >= t.clusters;
-    part_mirrored[p] = votes ? 4 * t.against >= 3 * t.decided : mirrored_as_a_whole(t);
+    const bool votes = t.clusters >= local && t.decided >= 4 && 4 * t.decided >= t.clusters;
+    const bool moved = 20 * t.alone <= t.clusters;
+    part_mirrored[p] = moved && (votes ? 10 * t.against >= 9 * t.decided : mirrored_as_a_whole(t));
     any |= part_mirrored[p] != 0;
   }
   if (!any) return {};

@@ -27,7 +27,10 @@ std::vector<Mat3> transported_rotations(const Points& original, const Points& ed
       // A neighbourhood the edit left as it was keeps the identity exactly, without a solve.
       bool same = b0.row(c) == b1.row(c);
       for (int j = 1; j < k && same; ++j) same = b0.row(nb[j]) == b1.row(nb[j]);
-      if (same) continue;
+      if (same) {
+        if (orientation) (*orientation)[cc] = 2;  // left alone: no mirror of the part moves it so
+        continue;
+      }
       Mat3 cov = Mat3::Zero();
       for (int j = 1; j < k; ++j) {
         const Vec3 e0 = (b0.row(nb[j]) - b0.row(c)).transpose();

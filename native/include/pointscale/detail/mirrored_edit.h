@@ -15,15 +15,17 @@ namespace pointscale {
 
 // Which points lie in a part the edit mirrors. Each level-0 cluster's neighbourhood votes: the
 // edit keeps its orientation or reverses it (its best orthogonal map's determinant), or it
-// cannot tell (a nearly flat neighbourhood, or one the edit left alone). Orientation is local,
+// cannot tell (a nearly flat neighbourhood), or the edit left it alone. Orientation is local,
 // so a bend that rolls a part round on itself (whose best linear map as a whole can reverse)
-// keeps it, while a mirror with an uneven scale, or with a sculpted surface on it, reverses it;
-// a dent that turns a bulge inside out reverses a few clusters only. A part where at least 4
-// clusters and a quarter of them tell is mirrored when three quarters of those say reversed. A
-// part too flat for that (a plate, a plane of handles) is mirrored when its anchors fit a
-// mirror-similarity four times better than any similarity without the mirror: a lift fits both
-// alike, and a flat part has no orientation at all (a mirror across its own plane moves it as
-// a half turn does).
+// keeps it, while a mirror with an uneven scale, or with a sculpted surface on it, reverses it.
+// A mirror moves every cluster and reverses every one that can tell: a part with local
+// neighbourhoods (three times as many clusters as a neighbourhood holds) where a quarter of its
+// clusters tell is mirrored when nine in ten of those say reversed and at most one in twenty of
+// all its clusters was left alone, so a dent that presses a cap through a plane is no mirror of
+// the part. A part too flat for that (a plate, a plane of handles), or with a handful of
+// clusters, is mirrored when its anchors are a mirror of the stored ones to within rounding: a
+// mirror alone is told apart there, not a mirror together with another edit, and a flat part
+// has no orientation at all (a mirror across its own plane moves it as a half turn does).
 // original, edited  #P by 3; level0: the model's level-0 support; parts: #P part labels
 // (connected_parts.h), or empty for one part; vote: the clusters' orientation votes, from
 // transported_rotations(original, edited, level0, &vote).

@@ -12,10 +12,10 @@ namespace pointscale {
 // neighbourhood the edit left as it was gives exactly the identity.
 // original, edited  #P by 3. Returns #C rotations.
 // orientation: if given, receives #C votes of whether the edit keeps (+1) or reverses (-1) the
-// orientation of each cluster's neighbourhood (its best orthogonal map's determinant), or
-// cannot tell (0): the neighbourhood spreads across its plane by less than 1% of its spread
-// along it (a lift can turn the sign of its thinnest direction's fit there, and a mirror
-// across the plane moves it as a half turn does), or the edit left it alone (mirrored_edit.h).
+// orientation of each cluster's neighbourhood (its best orthogonal map's determinant), cannot
+// tell (0: the neighbourhood spreads across its plane by less than 1% of its spread along it,
+// where a lift can turn the sign of its thinnest direction's fit, and a mirror across the
+// plane moves it as a half turn does), or left it alone (2) (mirrored_edit.h).
 std::vector<Mat3> transported_rotations(const Points& original, const Points& edited, const LevelSupport& support,
                                         std::vector<signed char>* orientation = nullptr);
 
