@@ -300,3 +300,24 @@ def test_an_output_that_cannot_be_set_aside_leaves_nothing_behind(tmp_path, monk
         with stage:
             stage.commit()
     assert os.listdir(tmp_path) == ["a.ply"] and (tmp_path / "a.ply").read_text() == "old"
+
+
+def test_a_file_that_cannot_be_put_back_is_named_with_where_it_is_kept(tmp_path, monkeypatch):
+    for name in ("a.ply", "b.ply"):
+        (tmp_path / name).write_text("old " + name)
+    stage = staged_output.StagedOutput()
+    for name in ("a.ply", "b.ply"):
+        stage.temporary(tmp_path / name).write_text("new " + name)
+    real = os.replace
+
+    def replace(src, dst):
+        if ".part" in str(src) and str(dst).endswith("b.ply"):
+            raise OSError(5, "Input/output error")      # the second output fails ...
+        if ".old" in str(src):
+            raise OSError(5, "Input/output error")      # ... and so does putting the first back
+        return real(src, dst)
+
+    monkeypatch.setattr(staged_output.os, "replace", replace)
+    with pytest.raises(OSError, match=r"could not put back .*a.ply: .*kept as .*\.a\..*\.old\.ply"):
+        with stage:
+            stage.commit()

@@ -65,8 +65,9 @@ class StagedOutput:
             except BaseException:
                 _put_back(placed, replaced)
                 raise
-            for backup, _ in replaced:
-                backup.unlink(missing_ok=True)
+            for backup, _ in replaced:  # the new files are in place: a second name left behind is no failure
+                with contextlib.suppress(OSError):
+                    backup.unlink(missing_ok=True)
             for stale in remove_after:
                 Path(stale).unlink(missing_ok=True)
             self._pending.clear()
@@ -125,7 +126,8 @@ def _put_back(placed: list[Path], replaced: list[tuple[Path, Path]]) -> None:
             else:  # not replaced yet: still the old file, of which backup is a second name
                 backup.unlink()
         except OSError as e:
-            errors.append(e)
+            errors.append(OSError(e.errno, f"could not put back {final}: {e.strerror}; the earlier file "
+                                           f"is kept as {backup}"))
     if errors:
         raise errors[0]
 
