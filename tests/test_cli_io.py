@@ -12,20 +12,9 @@ import pytest
 from plyfile import PlyData, PlyElement
 
 import pointscale as ps
-from helpers import diagonal, shared_model
+from helpers import diagonal, one_line_error, run_cli as run, shared_model
 from pointscale import cli, io
 from pointscale.io import read_ply, write_ply
-
-
-def run(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "pointscale", *args], capture_output=True, text=True, cwd=cwd)
-
-
-def one_line_error(done) -> str:
-    assert done.returncode == 2, (done.returncode, done.stdout, done.stderr)
-    lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
-    return lines[0]
 
 
 def ellipsoid_with_bumps(n: int, axes=(1.3, 0.8, 0.6), seed: int = 3) -> np.ndarray:

@@ -2,8 +2,6 @@
 in untyped text columns, OBJ and OFF content with no place in a Scan, text that is not pure
 UTF-8, decompression bombs in a decomposition folder, and an empty -o."""
 import io as pyio
-import subprocess
-import sys
 import time
 import zipfile
 from pathlib import Path
@@ -13,17 +11,7 @@ import pytest
 from plyfile import PlyData, PlyElement
 
 import pointscale as ps
-
-
-def run(*args):
-    return subprocess.run([sys.executable, "-m", "pointscale", *args], capture_output=True, text=True)
-
-
-def one_line_error(done) -> str:
-    assert done.returncode == 2, (done.returncode, done.stdout, done.stderr)
-    lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
-    return lines[0]
+from helpers import one_line_error, run_cli as run
 
 
 def points(n=400, seed=5):

@@ -3,8 +3,6 @@ files in place, format details of a decomposition folder that no longer fit its 
 whose coordinates are lists, and two calls whose errors were not ValueErrors."""
 import json
 import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -12,17 +10,7 @@ from plyfile import PlyData, PlyElement
 
 import pointscale as ps
 from pointscale.cli import staged_output
-
-
-def run(*args):
-    return subprocess.run([sys.executable, "-m", "pointscale", *args], capture_output=True, text=True)
-
-
-def one_line_error(done) -> str:
-    assert done.returncode == 2, (done.returncode, done.stdout, done.stderr)
-    lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
-    return lines[0]
+from helpers import one_line_error, run_cli as run
 
 
 def cloud_ply(path, seed, red):
