@@ -179,3 +179,33 @@ def test_a_dimple_pressed_into_a_plate_is_no_mirror():
     # Where the base hardly moved, the result moves as little (before: the detail changed side).
     moved = np.linalg.norm(dimpled[far] - b[far], axis=1).max()
     assert np.linalg.norm(got[far] - plain[far], axis=1).max() < 2 * moved + 1e-12
+
+
+def terrain(n=110):
+    u = np.linspace(-1, 1, n)
+    x, y = (a.ravel() for a in np.meshgrid(u, u))
+    z = 0.15 * np.sin(2.1 * x + 0.3) * np.cos(1.7 * y) + 0.004 * np.sin(43 * x + 11 * y)
+    return np.column_stack([x, y, z])
+
+
+@pytest.mark.parametrize("shape, levels", [("terrain", 4), ("sphere", 6)])
+@pytest.mark.parametrize("after", ["brush", "scale -1.02"])
+def test_a_mirror_with_more_on_a_part_judged_as_a_whole(shape, levels, after):
+    """A third reviewer's cases: a terrain is too flat for its clusters to vote, and at 6 levels
+    a sphere has a handful of clusters; a mirror with a brush on top, or a scale of -1.02, was
+    taken for no mirror (the detail went to the other side: 1e-2 and 0.6 of the diagonal off)."""
+    points = terrain() if shape == "terrain" else ps.shapes.bumpy_sphere(12000, fine=0.02, fine_frequency=11)
+    dec = ps.decompose(points, levels=levels)
+    b, o = dec.base, dec.origin
+    diag = diagonal(b)
+    flip = np.array([-1.0, 1.0, 1.0])
+    if after == "brush":
+        t = np.clip(1 - np.linalg.norm(b - b[0], axis=1) / (0.3 * diag), 0, 1)
+        moved = b + (0.05 * diag * t * t * (3 - 2 * t))[:, None] * np.array([0.0, 0.0, 1.0])
+        mirrored = o + (moved - o) * flip
+    else:
+        moved = o + (b - o) * np.array([1.02, 1.0, 1.0])
+        mirrored = o + (b - o) * np.array([-1.02, 1.0, 1.0])
+    got = ps.reconstruct(dec, base=mirrored)
+    want = o + (ps.reconstruct(dec, base=moved) - o) * flip
+    assert np.linalg.norm(got - want, axis=1).max() < 1e-13 * diagonal(got)

@@ -1,5 +1,6 @@
 #include "pointscale/detail/mirrored_edit.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -16,23 +17,45 @@ namespace {
 struct PartTally {
   std::size_t clusters = 0, decided = 0, against = 0, alone = 0;
   Vec3 original = Vec3::Zero(), edited = Vec3::Zero();
-  Mat3 cross = Mat3::Zero();  // sum (o - o_mean)(e - e_mean)^T over the anchors
+  Mat3 cross = Mat3::Zero();   // sum (o - o_mean)(e - e_mean)^T over the anchors
+  Mat3 spread = Mat3::Zero();  // sum (o - o_mean)(o - o_mean)^T over the anchors
   double spread_original = 0.0, spread_edited = 0.0;
 };
 
-// A part whose clusters mostly cannot tell (a nearly flat one, such as a plate or a plane of
-// handles): mirrored when its anchors are, to within rounding (a mirror of the edited part's
-// anchors fits them to 1e-6 of their spread, while a turn with a uniform scale misses by more
-// than four times that and than rounding). With the singular values s1 >= s2 >= s3 of the cross
-// sums, where the best orthogonal map reverses orientation, the two fit to within
-// E - (s1 + s2 + s3)^2 / O and E - (s1 + s2 - s3)^2 / O. Only a mirror alone is told apart
-// there: a lift, a dimple pressed through the part's own plane or a brush on a mirrored plate
-// is not a mirror to within rounding, and a flat part (s3 = 0) has no orientation at all.
+// A part whose clusters mostly cannot tell (a nearly flat one: a plate, a relief, a terrain; or
+// one with a handful of clusters, each neighbourhood holding most of the part), judged from its
+// anchors as a whole. Its best linear map A (least squares about the centroids) must reverse
+// orientation. The nearest orthogonal map to A is then a mirror across some plane, perhaps with
+// a turn about that plane's normal v (v: its eigenvector of eigenvalue -1):
+//  - where the part spreads along v (at least 5% of its largest spread), the mirror cuts across
+//    it, as no half turn does: mirrored when A explains the edit to 1% of the edited spread (a
+//    mirror with a brush, a smoothing or a scale of -1.02 on top) and crushes no direction (its
+//    singular values within a factor of 20);
+//  - where v is the part's thin direction, the map mirrors the part across its own plane, as a
+//    half turn or a dimple pressed through it moves it too: mirrored only when the anchors are a
+//    mirror to within rounding. With the singular values s1 >= s2 >= s3 of the cross sums, a
+//    mirror-similarity and a similarity fit to within E - (s1 + s2 + s3)^2 / O and
+//    E - (s1 + s2 - s3)^2 / O: the first must be below 1e-6 of E, the second four times above it.
+// A flat part (spread of rank 2) has no orientation at all.
 bool mirrored_as_a_whole(const PartTally& t) {
   if (t.clusters < 4 || !(t.spread_original > 0.0) || !(t.cross.determinant() < 0.0)) return false;
+  const Eigen::SelfAdjointEigenSolver<Mat3> shape(t.spread);
+  const Vec3 ev = shape.eigenvalues();  // ascending
+  if (!(ev(0) > 1e-9 * ev(2))) return false;
+  const Mat3 map = t.cross.transpose() * t.spread.inverse();  // e - e_mean = map (o - o_mean)
+  const Eigen::JacobiSVD<Mat3> polar(map, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  // A map that crushes a direction (a part squashed flat, or noise on a nearly flat part, whose
+  // thin direction's fit it blows up) has no orientation to read.
+  if (!(polar.singularValues()(2) >= 0.05 * polar.singularValues()(0))) return false;
+  const Mat3 nearest = polar.matrixU() * polar.matrixV().transpose();  // orthogonal, determinant -1
+  const Eigen::JacobiSVD<Mat3> fixed(nearest + Mat3::Identity(), Eigen::ComputeFullV);
+  const Vec3 normal = fixed.matrixV().col(2);  // (nearest + I) v = 0: the mirror's normal
+  if (normal.dot(t.spread * normal) >= 0.05 * ev(2)) {
+    const double unexplained = t.spread_edited - (t.cross.transpose() * t.spread.inverse() * t.cross).trace();
+    return unexplained < 1e-2 * t.spread_edited;
+  }
   const Eigen::JacobiSVD<Mat3> svd(t.cross);
   const Vec3 sv = svd.singularValues();
-  if (!(sv(2) > 1e-9 * sv(0))) return false;
   const double mirror = sv(0) + sv(1) + sv(2), turn = sv(0) + sv(1) - sv(2);
   const double misfit_mirror = t.spread_edited - mirror * mirror / t.spread_original;
   const double misfit_turn = t.spread_edited - turn * turn / t.spread_original;
@@ -69,6 +92,7 @@ std::vector<unsigned char> mirrored_points(const Points& original, const Points&
     const Vec3 o = b0.row(static_cast<Eigen::Index>(c)).transpose() - t.original;
     const Vec3 e = b1.row(static_cast<Eigen::Index>(c)).transpose() - t.edited;
     t.cross.noalias() += o * e.transpose();
+    t.spread.noalias() += o * o.transpose();
     t.spread_original += o.squaredNorm();
     t.spread_edited += e.squaredNorm();
   }
@@ -88,6 +112,22 @@ std::vector<unsigned char> mirrored_points(const Points& original, const Points&
     const bool votes = t.clusters >= local && t.decided >= 4 && 4 * t.decided >= t.clusters;
     const bool moved = 20 * t.alone <= t.clusters;
     part_mirrored[p] = moved && (votes ? 10 * t.against >= 9 * t.decided : mirrored_as_a_whole(t));
+    any |= part_mirrored[p] != 0;
+  }
+  if (!any) return {};
+  // A mirror moves every point of the part but those on its plane. A part whose points were left
+  // where they were, more than one in twenty, was pressed through a plane in part (a dent), not
+  // mirrored, however its anchors look: a handful of anchors can all lie in the pressed cap.
+  std::vector<std::size_t> points(tally.size(), 0), still(tally.size(), 0);
+  for (Eigen::Index i = 0; i < original.rows(); ++i) {
+    const std::size_t p = parts.empty() ? 0 : static_cast<std::size_t>(parts[static_cast<std::size_t>(i)]);
+    if (!part_mirrored[p]) continue;
+    ++points[p];
+    if (original.row(i) == edited.row(i)) ++still[p];
+  }
+  any = false;
+  for (std::size_t p = 0; p < tally.size(); ++p) {
+    if (part_mirrored[p] && 20 * still[p] > points[p]) part_mirrored[p] = 0;
     any |= part_mirrored[p] != 0;
   }
   if (!any) return {};

@@ -22,10 +22,13 @@ namespace pointscale {
 // neighbourhoods (three times as many clusters as a neighbourhood holds) where a quarter of its
 // clusters tell is mirrored when nine in ten of those say reversed and at most one in twenty of
 // all its clusters was left alone, so a dent that presses a cap through a plane is no mirror of
-// the part. A part too flat for that (a plate, a plane of handles), or with a handful of
-// clusters, is mirrored when its anchors are a mirror of the stored ones to within rounding: a
-// mirror alone is told apart there, not a mirror together with another edit, and a flat part
-// has no orientation at all (a mirror across its own plane moves it as a half turn does).
+// the part. A part too flat for that (a plate, a relief, a terrain), or with a handful of
+// clusters, is judged from its anchors as a whole: a mirror across a plane that cuts across it
+// counts when the part's best linear map reverses and explains the edit to 1% (so a brush or a
+// smoothing on top is allowed), and a mirror across the part's own plane, which a half turn or
+// a dimple pressed through it resembles, only to within rounding. A flat part has no
+// orientation at all. Last, a part with more than one point in twenty left where it was is no
+// mirror: a dent pressed a cap of it through a plane (a handful of anchors may all lie in it).
 // original, edited  #P by 3; level0: the model's level-0 support; parts: #P part labels
 // (connected_parts.h), or empty for one part; vote: the clusters' orientation votes, from
 // transported_rotations(original, edited, level0, &vote).
