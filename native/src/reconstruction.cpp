@@ -188,7 +188,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   if (turned) {
     std::vector<signed char> orientation;
     clusters = transported_rotations(model.base, p, model.support[0], &orientation);
-    mirrored = mirrored_points(model.base, p, model.support[0], model.parts, orientation);
+    mirrored = mirrored_points(model.base, p, model.support, model.parts, orientation);
     if (!mirrored.empty()) {
       reflect_rows(p, mirrored);
       clusters = transported_rotations(model.base, p, model.support[0]);

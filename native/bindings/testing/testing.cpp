@@ -1,7 +1,8 @@
 // pointscale._testing: the core's internals for the tests and bench/, kept out of the _core
 // module the package runs on. self_knn's rows are checked against a brute-force search, the
-// kd-tree's rows are what self_knn replaced (bench/knn_bench.py), and normals can be oriented
-// with another graph width than the package's (tests/test_normals.py).
+// kd-tree's rows are what self_knn replaced (bench/knn_bench.py), normals can be oriented
+// with another graph width than the package's (tests/test_normals.py), and which parts an edit
+// mirrors can be asked directly (tests/test_mirrored_edits.py).
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -11,6 +12,9 @@
 #include <vector>
 
 #include "../bindings.h"
+#include "pointscale/decomposition.h"
+#include "pointscale/detail/mirrored_edit.h"
+#include "pointscale/detail/transported_rotations.h"
 #include "pointscale/oriented_normals.h"
 #include "pointscale/parallel.h"
 #include "pointscale/self_knn.h"
@@ -70,4 +74,19 @@ PYBIND11_MODULE(_testing, m) {
     Points p = to_points(points);
     return without_gil(threads, [&] { return oriented_normals(std::move(p), neighbors, width); });
   }, py::arg("points"), py::arg("neighbors"), py::arg("width") = orientation_width, py::arg("threads") = 0);
+
+  // Which points lie in a part that an edited base (#P by 3, in the model's coordinates: the
+  // package's world coordinates less the decomposition's origin) mirrors (mirrored_edit.h): #P
+  // flags, all 0 when none.
+  m.def("mirrored_points", [](const MultiscaleModel& model, const DoubleArray& edited, int threads) {
+    const Points e = to_points(edited);
+    if (e.rows() != model.base.rows() || model.bands() == 0) throw py::value_error("edited must be the model's (n, 3) base");
+    std::vector<unsigned char> flags = without_gil(threads, [&] {
+      std::vector<signed char> votes;
+      transported_rotations(model.base, e, model.support[0], &votes);
+      return mirrored_points(model.base, e, model.support, model.parts, votes);
+    });
+    flags.resize(static_cast<std::size_t>(e.rows()), 0);
+    return py::array_t<unsigned char>(static_cast<py::ssize_t>(flags.size()), flags.data());
+  }, py::arg("model"), py::arg("edited"), py::arg("threads") = 0);
 }
