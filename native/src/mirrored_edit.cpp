@@ -105,20 +105,25 @@ std::vector<unsigned char> mirrored_points(const Points& original, const Points&
     t.spread_original += o.squaredNorm();
     t.spread_edited += e.squaredNorm();
   }
-  // Votes count where neighbourhoods are local: the part has at least three times as many
-  // clusters as a neighbourhood holds. A part with fewer at level 0 whose anchors' best
-  // orthogonal map reverses (a candidate; other parts cost nothing more) votes at the first
-  // finer level where it has that many, from the base positions of that level's anchors. A part
-  // that cannot tell at any level is judged as a whole.
+  // Votes count where neighbourhoods are local: the part has at least ten times as many
+  // clusters as a neighbourhood holds. A part with fewer at level 0 is a candidate when its
+  // level-0 votes, though not local, say reversed as a mirror's do (nine in ten of those that
+  // tell) and its anchors' best orthogonal map reverses: it then votes at the first finer level
+  // where it has that many clusters, from the base positions of that level's anchors. Other
+  // parts cost nothing more on each call, also through an editing session on a dented part. A
+  // part whose clusters cannot tell (nearly flat) is judged as a whole.
   std::vector<int> verdict(tally.size(), 0);
   std::vector<unsigned char> pending(tally.size(), 0);
   bool any = false, waiting = false;
   const auto local = [&](const LevelSupport& s) { return 10 * static_cast<std::size_t>(std::max(s.neighbors, 1)); };
   for (std::size_t p = 0; p < tally.size(); ++p) {
     const PartTally& t = tally[p];
-    int v = t.clusters >= local(level0) ? by_votes(t.clusters, t.decided, t.against, t.alone) : -1;
-    if (v < 0 && t.clusters > 0 && t.cross.determinant() < 0.0) { pending[p] = 1; waiting = true; }
-    verdict[p] = v;
+    const bool is_local = t.clusters >= local(level0);
+    verdict[p] = is_local ? by_votes(t.clusters, t.decided, t.against, t.alone) : -1;
+    if (!is_local && t.decided > 0) {
+      verdict[p] = 0;  // it can tell: the finer votes decide, or it is no mirror
+      if (10 * t.against >= 9 * t.decided && t.cross.determinant() < 0.0) { pending[p] = 1; waiting = true; }
+    }
   }
   for (std::size_t l = 1; waiting && l < support.size(); ++l) {
     const LevelSupport& s = support[l];
@@ -152,6 +157,7 @@ std::vector<unsigned char> mirrored_points(const Points& original, const Points&
   }
   std::vector<unsigned char> part_mirrored(tally.size(), 0);
   for (std::size_t p = 0; p < tally.size(); ++p) {
+    if (pending[p]) verdict[p] = -1;  // no level local enough: judged as a whole
     part_mirrored[p] = verdict[p] > 0 || (verdict[p] < 0 && mirrored_as_a_whole(tally[p]));
     any |= part_mirrored[p] != 0;
   }

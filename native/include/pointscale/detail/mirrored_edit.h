@@ -21,13 +21,13 @@ namespace pointscale {
 // A mirror moves every cluster and reverses every one that can tell: where enough clusters tell,
 // the part is mirrored when nine in ten of those say reversed and at most one in twenty of all
 // its clusters was left alone, so a dent that presses a cap through a plane is no mirror of it.
-// Votes count where neighbourhoods are local (three times as many clusters in the part as a
-// neighbourhood holds); a part with fewer level-0 clusters whose anchors' best map reverses
-// votes at the first finer level where it has that many, from the base positions of that
-// level's anchors. A part that cannot tell at any level (nearly flat: a plate, a relief, a
-// terrain) is mirrored only when its anchors are a mirror of the stored ones to within
-// rounding: a mirror across its own plane looks like a half turn or a pressed dimple, and the
-// fit of its thin direction follows any warp. A flat part has no orientation at all.
+// Votes count where neighbourhoods are local (ten times as many clusters in the part as a
+// neighbourhood holds); a part with fewer level-0 clusters whose votes there and whose anchors'
+// best map say reversed votes at the first finer level with that many, from the base positions
+// of that level's anchors. A part that cannot tell (nearly flat: a plate, a relief, a terrain)
+// is mirrored only when its anchors are a mirror of the stored ones to within rounding: a mirror
+// across its own plane looks like a half turn or a pressed dimple, and the fit of its thin
+// direction follows any warp. A flat part has no orientation at all.
 // original, edited  #P by 3; support: the model's levels' supports (level 0 first); parts: #P
 // part labels (connected_parts.h), or empty for one part; vote: level 0's orientation votes,
 // from transported_rotations(original, edited, support[0], &vote).
