@@ -1,13 +1,12 @@
 #include "pointscale/detail/mirrored_edit.h"
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <algorithm>
-#include <cmath>
 
 #include "pointscale/parallel.h"
 #include "pointscale/detail/level_normals.h"
+#include "pointscale/detail/transported_rotations.h"
 
 namespace pointscale {
 
@@ -44,22 +43,9 @@ bool mirrored_as_a_whole(const PartTally& t) {
 // Cluster c's orientation vote at a level (transported_rotations.h: 1 kept, -1 reversed, 0 cannot
 // tell, 2 left alone), from the base positions of the level's anchors.
 signed char cluster_vote(const Points& b0, const Points& b1, const LevelSupport& support, Index c) {
-  const int k = support.neighbors;
-  const Index* nb = support.neighborhoods.data() + static_cast<std::size_t>(c) * k;
-  const double h = support.h(c);
-  bool same = b0.row(c) == b1.row(c);
-  for (int j = 1; j < k && same; ++j) same = b0.row(nb[j]) == b1.row(nb[j]);
-  if (same) return 2;
-  Mat3 cov = Mat3::Zero();
-  for (int j = 1; j < k; ++j) {
-    const Vec3 e0 = (b0.row(nb[j]) - b0.row(c)).transpose();
-    const Vec3 e1 = (b1.row(nb[j]) - b1.row(c)).transpose();
-    cov.noalias() += std::exp(-e0.squaredNorm() / (h * h)) * e0 * e1.transpose();
-  }
-  const Eigen::JacobiSVD<Mat3> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Vec3 sv = svd.singularValues();
-  if (!(sv(1) > 1e-9 * sv(0)) || !(sv(2) >= 1e-2 * sv(0))) return 0;
-  return (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0 ? -1 : 1;
+  Mat3 cov;
+  if (!neighbourhood_cross(b0, b1, support, c, cov)) return 2;
+  return orientation_vote(Eigen::JacobiSVD<Mat3>(cov, Eigen::ComputeFullU | Eigen::ComputeFullV));
 }
 
 // Whether a part's votes say mirrored: a mirror moves every cluster and reverses every one that

@@ -1,5 +1,6 @@
 // The coarse turn of an edited level 0, per cluster of its support (reconstruction.cpp).
 #pragma once
+#include <Eigen/SVD>
 #include <vector>
 
 #include "pointscale/level_support.h"
@@ -18,5 +19,15 @@ namespace pointscale {
 // plane moves it as a half turn does), or left it alone (2) (mirrored_edit.h).
 std::vector<Mat3> transported_rotations(const Points& original, const Points& edited, const LevelSupport& support,
                                         std::vector<signed char>* orientation = nullptr);
+
+// Cluster c's neighbourhood between two sets of the level's anchor positions (b0, b1: #C by 3,
+// support_centroids): into cov the weighted cross sums, sum w e0 e1^T, with w = exp(-|e0|^2 / h^2)
+// over the neighbours' edges e from the cluster's anchor. False, cov untouched, where no anchor
+// of the neighbourhood moved.
+bool neighbourhood_cross(const Points& b0, const Points& b1, const LevelSupport& support, Index c, Mat3& cov);
+
+// The orientation vote of a neighbourhood from its cross sums' SVD (full U and V): 1 kept, -1
+// reversed, 0 cannot tell (spread across its plane under 1% of its spread along it, or on a line).
+signed char orientation_vote(const Eigen::JacobiSVD<Mat3>& svd);
 
 }  // namespace pointscale
