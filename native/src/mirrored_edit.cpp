@@ -1,8 +1,10 @@
 #include "pointscale/detail/mirrored_edit.h"
+#include "pointscale/mirrored_parts.h"
 
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <stdexcept>
 
 #include "pointscale/parallel.h"
 #include "pointscale/detail/level_normals.h"
@@ -150,6 +152,16 @@ std::vector<unsigned char> mirrored_points(const Points& original, const Points&
   if (!any) return {};
   std::vector<unsigned char> flags(static_cast<std::size_t>(original.rows()));
   for (std::size_t i = 0; i < flags.size(); ++i) flags[i] = part_mirrored[part_of_point(static_cast<Index>(i))];
+  return flags;
+}
+
+std::vector<unsigned char> mirrored_parts(const MultiscaleModel& model, const Points& edited) {
+  if (edited.rows() != model.base.rows() || model.bands() == 0)
+    throw std::invalid_argument("edited must be the model's (n, 3) base, and the model must have bands");
+  std::vector<signed char> votes;
+  transported_rotations(model.base, edited, model.support[0], &votes);
+  std::vector<unsigned char> flags = mirrored_points(model.base, edited, model.support, model.parts, votes);
+  flags.resize(static_cast<std::size_t>(edited.rows()), 0);
   return flags;
 }
 

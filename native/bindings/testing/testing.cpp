@@ -12,9 +12,7 @@
 #include <vector>
 
 #include "../bindings.h"
-#include "pointscale/decomposition.h"
-#include "pointscale/detail/mirrored_edit.h"
-#include "pointscale/detail/transported_rotations.h"
+#include "pointscale/mirrored_parts.h"
 #include "pointscale/oriented_normals.h"
 #include "pointscale/parallel.h"
 #include "pointscale/self_knn.h"
@@ -76,17 +74,11 @@ PYBIND11_MODULE(_testing, m) {
   }, py::arg("points"), py::arg("neighbors"), py::arg("width") = orientation_width, py::arg("threads") = 0);
 
   // Which points lie in a part that an edited base (#P by 3, in the model's coordinates: the
-  // package's world coordinates less the decomposition's origin) mirrors (mirrored_edit.h): #P
+  // package's world coordinates less the decomposition's origin) mirrors (mirrored_parts.h): #P
   // flags, all 0 when none.
   m.def("mirrored_points", [](const MultiscaleModel& model, const DoubleArray& edited, int threads) {
     const Points e = to_points(edited);
-    if (e.rows() != model.base.rows() || model.bands() == 0) throw py::value_error("edited must be the model's (n, 3) base");
-    std::vector<unsigned char> flags = without_gil(threads, [&] {
-      std::vector<signed char> votes;
-      transported_rotations(model.base, e, model.support[0], &votes);
-      return mirrored_points(model.base, e, model.support, model.parts, votes);
-    });
-    flags.resize(static_cast<std::size_t>(e.rows()), 0);
+    const std::vector<unsigned char> flags = without_gil(threads, [&] { return mirrored_parts(model, e); });
     return py::array_t<unsigned char>(static_cast<py::ssize_t>(flags.size()), flags.data());
   }, py::arg("model"), py::arg("edited"), py::arg("threads") = 0);
 }
