@@ -14,9 +14,31 @@ namespace pointscale {
 
 namespace {
 
-// A part's votes, and sums over its anchors for a part too flat to vote.
-struct PartTally {
+// A part's orientation votes at one level (transported_rotations.h: 1 kept, -1 reversed, 0 cannot
+// tell, 2 left alone).
+struct VoteCount {
   std::size_t clusters = 0, decided = 0, against = 0, alone = 0;
+  void add(signed char vote) {
+    ++clusters;
+    if (vote == 2) ++alone;
+    if (vote != 1 && vote != -1) return;
+    ++decided;
+    if (vote < 0) ++against;
+  }
+  // Whether they say mirrored: a mirror moves every cluster and reverses every one that can
+  // tell. Enough clusters must tell (4, and a quarter of them); then nine in ten of those must
+  // say reversed, and at most one in twenty of all be left alone. So a dent that presses a cap
+  // through a plane, even most of the part, is no mirror of it: the rest stays, or turns as a
+  // bend does. 1 mirrored, 0 not, -1 cannot tell.
+  int verdict() const {
+    if (decided < 4 || 4 * decided < clusters) return -1;
+    return 10 * against >= 9 * decided && 20 * alone <= clusters ? 1 : 0;
+  }
+};
+
+// A part's level-0 votes, and sums over its anchors for a part too flat to vote.
+struct PartTally {
+  VoteCount votes;
   Vec3 original = Vec3::Zero(), edited = Vec3::Zero();
   Mat3 cross = Mat3::Zero();  // sum (o - o_mean)(e - e_mean)^T over the anchors
   double spread_original = 0.0, spread_edited = 0.0;
@@ -32,7 +54,7 @@ struct PartTally {
 // E - (s1 + s2 + s3)^2 / O and E - (s1 + s2 - s3)^2 / O: the first must be below 1e-6 of E and
 // the second four times above it. A flat part (s3 = 0) has no orientation at all.
 bool mirrored_as_a_whole(const PartTally& t) {
-  if (t.clusters < 4 || !(t.spread_original > 0.0) || !(t.cross.determinant() < 0.0)) return false;
+  if (t.votes.clusters < 4 || !(t.spread_original > 0.0) || !(t.cross.determinant() < 0.0)) return false;
   const Eigen::JacobiSVD<Mat3> svd(t.cross);
   const Vec3 sv = svd.singularValues();
   if (!(sv(2) > 1e-9 * sv(0))) return false;
@@ -50,16 +72,6 @@ signed char cluster_vote(const Points& b0, const Points& b1, const LevelSupport&
   return orientation_vote(Eigen::JacobiSVD<Mat3>(cov, Eigen::ComputeFullU | Eigen::ComputeFullV));
 }
 
-// Whether a part's votes say mirrored: a mirror moves every cluster and reverses every one that
-// can tell. Enough clusters must tell (4, and a quarter of them); then nine in ten of those must
-// say reversed, and at most one in twenty of all be left alone. So a dent that presses a cap
-// through a plane, even most of the part, is no mirror of it: the rest stays, or turns as a bend
-// does. Returns 1 mirrored, 0 not, -1 cannot tell.
-int by_votes(std::size_t clusters, std::size_t decided, std::size_t against, std::size_t alone) {
-  if (decided < 4 || 4 * decided < clusters) return -1;
-  return 10 * against >= 9 * decided && 20 * alone <= clusters ? 1 : 0;
-}
-
 }  // namespace
 
 std::vector<unsigned char> mirrored_points(const Points& original, const Points& edited,
@@ -75,16 +87,14 @@ std::vector<unsigned char> mirrored_points(const Points& original, const Points&
   auto part_of_point = [&](Index i) { return parts.empty() ? std::size_t(0) : static_cast<std::size_t>(parts[static_cast<std::size_t>(i)]); };
   for (std::size_t c = 0; c < vote.size(); ++c) {
     PartTally& t = tally[part_of_point(level0.anchors[c])];
-    ++t.clusters;
+    t.votes.add(vote[c]);
     t.original += b0.row(static_cast<Eigen::Index>(c)).transpose();
     t.edited += b1.row(static_cast<Eigen::Index>(c)).transpose();
-    if (vote[c] == 2) ++t.alone;
-    if (vote[c] != 1 && vote[c] != -1) continue;
-    ++t.decided;
-    if (vote[c] < 0) ++t.against;
   }
-  for (PartTally& t : tally)
-    if (t.clusters > 0) { t.original /= static_cast<double>(t.clusters); t.edited /= static_cast<double>(t.clusters); }
+  for (PartTally& t : tally) {
+    const double count = static_cast<double>(t.votes.clusters);
+    if (count > 0) { t.original /= count; t.edited /= count; }
+  }
   for (std::size_t c = 0; c < vote.size(); ++c) {
     PartTally& t = tally[part_of_point(level0.anchors[c])];
     const Vec3 o = b0.row(static_cast<Eigen::Index>(c)).transpose() - t.original;
@@ -106,11 +116,12 @@ std::vector<unsigned char> mirrored_points(const Points& original, const Points&
   const auto local = [&](const LevelSupport& s) { return 10 * static_cast<std::size_t>(std::max(s.neighbors, 1)); };
   for (std::size_t p = 0; p < tally.size(); ++p) {
     const PartTally& t = tally[p];
-    const bool is_local = t.clusters >= local(level0);
-    verdict[p] = is_local ? by_votes(t.clusters, t.decided, t.against, t.alone) : -1;
-    if (!is_local && t.decided > 0) {
+    const VoteCount& v = t.votes;
+    const bool is_local = v.clusters >= local(level0);
+    verdict[p] = is_local ? v.verdict() : -1;
+    if (!is_local && v.decided > 0) {
       verdict[p] = 0;  // it can tell: the finer votes decide, or it is no mirror
-      if (10 * t.against >= 9 * t.decided && t.cross.determinant() < 0.0) { pending[p] = 1; waiting = true; }
+      if (10 * v.against >= 9 * v.decided && t.cross.determinant() < 0.0) { pending[p] = 1; waiting = true; }
     }
   }
   for (std::size_t l = 1; waiting && l < support.size(); ++l) {
@@ -128,18 +139,13 @@ std::vector<unsigned char> mirrored_points(const Points& original, const Points&
     parallel_for(voting.size(), [&](std::size_t b, std::size_t e) {
       for (std::size_t j = b; j < e; ++j) votes[j] = cluster_vote(c0, c1, s, voting[j]);
     }, {}, 256);
-    std::vector<std::size_t> decided(tally.size(), 0), against(tally.size(), 0), alone(tally.size(), 0);
-    for (std::size_t j = 0; j < voting.size(); ++j) {
-      const std::size_t p = part_of_point(s.anchors[static_cast<std::size_t>(voting[j])]);
-      if (votes[j] == 2) ++alone[p];
-      if (votes[j] != 1 && votes[j] != -1) continue;
-      ++decided[p];
-      if (votes[j] < 0) ++against[p];
-    }
+    std::vector<VoteCount> count(tally.size());  // every cluster of a voting part votes
+    for (std::size_t j = 0; j < voting.size(); ++j)
+      count[part_of_point(s.anchors[static_cast<std::size_t>(voting[j])])].add(votes[j]);
     waiting = false;
     for (std::size_t p = 0; p < tally.size(); ++p) {
       if (!pending[p] || clusters[p] < local(s)) { waiting |= pending[p] != 0; continue; }
-      verdict[p] = by_votes(clusters[p], decided[p], against[p], alone[p]);
+      verdict[p] = count[p].verdict();
       pending[p] = 0;  // local here: this level's votes, or a whole judgement, decide
     }
   }
