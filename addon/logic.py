@@ -273,6 +273,42 @@ def check_points(points: np.ndarray, minimum: int = 4) -> str | None:
     return None
 
 
+def uneven_scale_message(linear: np.ndarray, name: str) -> str | None:
+    """What to tell the artist when the object is shown stretched: ``linear`` is the 3x3 part of
+    its world matrix. The engine works on the mesh as stored, so under an unapplied non-uniform
+    scale (or a parent's shear) Level 0 and the bands follow the unscaled shape, not the one in
+    the viewport, as Blender's own UV Unwrap warns. None for a rotation with a uniform scale,
+    mirrored or not."""
+    m = np.asarray(linear, dtype=np.float64)
+    gram = m.T @ m
+    size = float(np.trace(gram)) / 3.0
+    if not size > 0.0 or np.abs(gram - size * np.eye(3)).max() <= 1e-4 * size:
+        return None
+    axes = np.linalg.norm(m, axis=0)
+    shown = ", ".join(f"{a:.3g}" for a in axes)
+    return (f"'{name}' is shown with an unapplied non-uniform scale ({shown}): the decomposition works on the "
+            "mesh as stored, so Level 0 and the bands follow its unscaled shape. Apply Scale (Ctrl+A) first to "
+            "decompose the shape you see")
+
+
+def loose_vertices_message(n_vertices: int, edges: np.ndarray) -> str | None:
+    """With Keep Parts Apart, vertices in no edge join the part of their nearest vertex and are
+    smoothed with it (a scan's untriangulated points): say how many, since helper vertices then
+    move to that surface in the base. None when there are none, or no edges at all (a point
+    cloud, decomposed as one surface)."""
+    e = np.asarray(edges).reshape(-1)
+    if n_vertices == 0 or e.size == 0:
+        return None
+    used = np.zeros(n_vertices, dtype=bool)
+    used[e] = True
+    loose = n_vertices - int(used.sum())
+    if loose == 0:
+        return None
+    first = int(np.argmin(used))
+    return (f"{loose} vertices in no edge (first: index {first}) joined the part of their nearest vertex, as a "
+            "scan's untriangulated points do: their base lies on that part's surface")
+
+
 def levels_that_fit(n: int, levels: int, decimation: float, min_coarse: int,
                     parts: bool = False) -> tuple[int, str | None]:
     """The most levels (at most `levels`) whose coarsest keeps min_coarse of n points at this

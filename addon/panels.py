@@ -5,8 +5,9 @@ from __future__ import annotations
 import textwrap
 
 import bpy
+import numpy as np
 
-from . import engine, keys, mirror_modifier, state, storage
+from . import engine, keys, logic, mirror_modifier, state, storage
 from .operators import morph as morph_ops
 
 
@@ -84,6 +85,10 @@ class POINTSCALE_PT_decompose(_Sub, bpy.types.Panel):
         row = col.row()
         row.active = bool(mirror_modifier.mirror_modifiers(context.active_object.modifiers))
         row.prop(s, "use_mirror_modifier")
+        obj = context.active_object
+        if logic.uneven_scale_message(np.array(obj.matrix_world)[:3, :3], obj.name):
+            _wrapped(layout.column(align=True), "Unapplied non-uniform scale: the decomposition follows the "
+                     "mesh's unscaled shape. Apply Scale (Ctrl+A) to decompose the shape you see", icon="ERROR")
         row = layout.row()
         row.scale_y = 1.4
         row.operator("pointscale.decompose", icon="MOD_SMOOTH")

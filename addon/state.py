@@ -9,7 +9,10 @@ def mesh_object_problem(obj) -> str | None:
     if obj is None:
         return "No active object: select a mesh"
     if obj.type != "MESH":
-        return f"'{obj.name}' is a {obj.type.lower()}, not a mesh: multiscale editing works on mesh objects"
+        kind = {"POINTCLOUD": "point cloud", "GPENCIL": "grease pencil object",
+                "GREASEPENCIL": "grease pencil object"}.get(obj.type, obj.type.lower().replace("_", " "))
+        article = "an" if kind[:1] in "aeiou" else "a"
+        return f"'{obj.name}' is {article} {kind}, not a mesh: multiscale editing works on mesh objects"
     if obj.library is not None or obj.data.library is not None:
         return f"'{obj.name}' is linked from a library and cannot be edited"
     return None

@@ -72,8 +72,11 @@ def _prepare(op, context):
         problem = compute.logic.check_points(points)
         if problem:
             raise ValueError(problem)
+        op._input_notes = []
         if s.keep_parts and len(mesh.edges):
             kwargs["edges"] = mesh_io.read_edges(mesh)
+            op._input_notes.append(compute.logic.loose_vertices_message(len(points), kwargs["edges"]))
+        op._input_notes.append(compute.logic.uneven_scale_message(np.array(obj.matrix_world)[:3, :3], obj.name))
         # A mesh too small for the levels asked gets the levels it supports, and is told how to
         # get the rest; the panel's setting stays as the artist set it. With Keep Parts Apart
         # its largest part is what has to support them: found here for a mesh too small as a
@@ -200,6 +203,9 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
                                   f"{', '.join(results)}, switched off")
         for message in layout.warnings:
             self.report({"WARNING"}, f"Decompose '{obj.name}': {message}")
+        for message in getattr(self, "_input_notes", ()):
+            if message:
+                self.report({"WARNING"}, f"Decompose '{obj.name}': {message}")
         # The whole mesh's note, unless its largest part had fewer levels still (in layout.warnings).
         if getattr(self, "_levels_note", None) and k + 1 == getattr(self, "_levels_fitted", k + 1):
             self.report({"WARNING"}, f"Decompose '{obj.name}': {self._levels_note}")

@@ -41,11 +41,14 @@ def morph_problem(context):
 
 
 def _new_morph_object(context, a_obj, b_obj, p0, pa, pb):
-    """The morph object: a copy of A's mesh at p0 with the keys 'A detail' and 'B detail',
-    linked where the view layer shows it, active and selected. On failure it is removed again."""
+    """The morph object: a copy of A (its modifiers, constraints, materials and parent, as
+    Duplicate gives) on a copy of A's mesh at p0 with the keys 'A detail' and 'B detail', linked
+    where the view layer shows it, active and selected. On failure it is removed again."""
     mesh = a_obj.data.copy()
     mesh.name = f"{a_obj.name} x {b_obj.name}"
-    obj = bpy.data.objects.new(mesh.name, mesh)
+    obj = a_obj.copy()
+    obj.data = mesh
+    obj.name = mesh.name
     try:
         if mesh.shape_keys is not None:
             obj.shape_key_clear()
