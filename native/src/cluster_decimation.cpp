@@ -34,6 +34,12 @@ struct Working {
   std::vector<double> xyz;  // 3 per point
   std::vector<Index> index;
   std::vector<double> nrm;  // 3 per point: oriented normals, when sheets are kept apart; else empty
+  // Only a cluster of at most this many points is split by side (describe_sides): a larger one
+  // spans enough of a curved surface that its normals disagree by curvature alone, and a split
+  // by the way they face would join far pieces that face alike (the two ends of a closed
+  // shell's diameter, one on each side), which the spatial splits after it need not part.
+  // A larger cluster whose normals disagree is split through space first.
+  std::size_t side_split_limit = 0;
 };
 
 // First and second moments about a reference point, the second as its six distinct entries.
@@ -60,12 +66,37 @@ Moments normal_moments(const Working& w, std::size_t begin, std::size_t end) {
 // through 180 degrees (a wall's rim) and 0.5 over a whole hemisphere.
 constexpr double one_sided_agreement = 0.6;
 
+// A point whose normal is more than 120 degrees from its cluster's mean faces the other way, as
+// the projection's side test (thin_sheets.h) has it. A cluster of a few points of one side and
+// many of the other keeps a long mean, so the mean alone misses it; its centroid then stands
+// for the wrong side in the other side's fits (on a hollow sphere one spacing thick, the sides
+// crossed at level 0).
+constexpr double facing_away = -0.5;
+
+// How many final clusters' worth of points a cluster split by side may hold (Working).
+constexpr std::size_t side_split_sizes = 8;
+
+bool some_point_faces_away(const Working& w, std::size_t begin, std::size_t end, const Vec3& mean) {
+  const Vec3 u = mean.normalized();
+  for (std::size_t i = begin; i < end; ++i)
+    if (w.nrm[3 * i] * u.x() + w.nrm[3 * i + 1] * u.y() + w.nrm[3 * i + 2] * u.z() < facing_away) return true;
+  return false;
+}
+
 // A cluster whose normals disagree is split by the side they face: along the main axis of their
 // outer products, the direction the two sides of a wall face, at first priority, since its
 // centroid lies between the sides, off both.
-void describe_sides(Cluster& c, double count, const Moments& normals) {
+void describe_sides(Cluster& c, const Working& w, std::size_t begin, std::size_t end, const Moments& normals) {
+  const auto count = static_cast<double>(end - begin);
   const Vec3 mean(normals.s[0] / count, normals.s[1] / count, normals.s[2] / count);
-  if (count < 2 || !(mean.norm() < one_sided_agreement)) return;
+  if (count < 2) return;
+  if (!(mean.norm() < one_sided_agreement) && !some_point_faces_away(w, begin, end, mean)) return;
+  if (end - begin > w.side_split_limit) {
+    // Split through space first, so that no cluster left when the target is reached holds
+    // both sides (its points are parted by side once there are few enough of them).
+    c.priority = count * 1e6;
+    return;
+  }
   Mat3 ss;
   ss << normals.ss[0], normals.ss[1], normals.ss[2], normals.ss[1], normals.ss[3], normals.ss[4], normals.ss[2],
       normals.ss[4], normals.ss[5];
@@ -101,7 +132,7 @@ Cluster whole(const Working& w, double max_variation) {
   Moments sums;
   for (std::size_t i = 0; i < n; ++i) sums.add(&w.xyz[3 * i], ref);
   describe(c, ref, static_cast<double>(n), sums, max_variation);
-  if (!w.nrm.empty()) describe_sides(c, static_cast<double>(n), normal_moments(w, 0, n));
+  if (!w.nrm.empty()) describe_sides(c, w, 0, n, normal_moments(w, 0, n));
   return c;
 }
 
@@ -197,8 +228,8 @@ bool split(Cluster& c, Working& w, ClusterStore& store, double max_variation) {
   describe(*a, o, static_cast<double>(lo - c.begin), below_sums, max_variation);
   describe(*b, o, static_cast<double>(c.end - lo), above_sums, max_variation);
   if (sheets) {
-    describe_sides(*a, static_cast<double>(lo - c.begin), normal_moments(w, c.begin, lo));
-    describe_sides(*b, static_cast<double>(c.end - lo), normal_moments(w, lo, c.end));
+    describe_sides(*a, w, c.begin, lo, normal_moments(w, c.begin, lo));
+    describe_sides(*b, w, lo, c.end, normal_moments(w, lo, c.end));
   }
   c.child[0] = a;
   c.child[1] = b;
@@ -288,9 +319,10 @@ Clustering cluster_decimate(const Points& points, std::size_t target, double max
   // The split of a cluster depends on its points alone, so the large ones, which nearly all
   // get split, are split ahead of time in parallel subtrees; the best-first order below then
   // replays the same sequence as a serial run, splitting the rest when it reaches them.
+  const std::size_t smallest = std::max<std::size_t>(2, n / target);
+  w.side_split_limit = side_split_sizes * smallest;
   std::deque<Cluster> top;
   Cluster& root = top.emplace_back(whole(w, max_variation));
-  const std::size_t smallest = std::max<std::size_t>(2, n / target);
   std::vector<Cluster*> frontier{&root};
   const std::size_t wanted = 16 * static_cast<std::size_t>(thread_count());
   // Level by level while there are fewer subtrees than workers want, each level in parallel.
