@@ -150,3 +150,10 @@ def as_callback(progress):
     if progress is not None and not callable(progress):
         raise ValueError("progress must be a callable taking a fraction in [0, 1], or None")
     return progress
+
+
+def flag(value, name: str) -> bool:
+    """A True/False option: a string such as "no" would otherwise count as True."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False, got {value!r}")
+    return bool(value)

@@ -153,6 +153,10 @@ class Symmetry:
         """(N, 3) positions of the whole model -> (n, 3), averaged over each orbit."""
         out = self._average(points - self._origin, True)
         keep_off = OFF_SEAM * self.mirror.seam
+        if keep_off == 0.0:
+            # seam=0: only points exactly on a plane are seam points; the others are kept a few
+            # single-precision steps off it, which a mesh's rounding cannot undo.
+            keep_off = 4.0 * 2.0 ** -23 * (np.abs(out).max() + np.abs(self._origin).max())
         for p, axis in enumerate(self.mirror.axis_indices):
             off, side = ~self.on_plane[:, p], self.sides[p]
             # Only points that came within the seam move (to just beyond it); the input's own

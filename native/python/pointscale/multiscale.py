@@ -14,7 +14,7 @@ import numpy as np
 
 from . import _core
 from ._checks import (MAX_COORDINATE, MAX_EXTENT, MAX_LEVELS, MAX_NEIGHBORS, MIN_COARSE_POINTS, as_array,
-                      as_callback, as_normals_of, as_points, centre, finite_result, mls_options, number, positive,
+                      as_callback, as_normals_of, as_points, centre, finite_result, flag, mls_options, number, positive,
                       raise_not_finite, require_extent, require_near, thread_option)
 from ._diffusion import settings_record, smoother_options
 
@@ -170,6 +170,8 @@ class Decomposition:
         """Writes one .npz file at `path`, whole or not at all: an earlier file there stays until
         the new one is complete. Raises ValueError when `path` is a folder or its folder is missing."""
         from .io.atomic import atomic_write
+        if not isinstance(path, (str, os.PathLike)):
+            raise ValueError(f"save needs the path of a file to write, got {type(path).__name__}")
         path = Path(os.fspath(path))
         if path.is_dir():
             raise ValueError(f"cannot save the decomposition to {path}: it is a folder; name a file, "
@@ -286,8 +288,10 @@ def _checked_arrays(arrays):
         raise _bad(f"details has {k} bands; 1 to {MAX_LEVELS - 1} are supported")
     out["details"] = floats("details", (k, n))
     normals = floats("base_normals", (n, 3))
-    if (np.einsum("ij,ij->i", normals, normals) > 1.0 + 1e-6).any():
-        raise _bad("base_normals must be unit vectors")
+    off_unit = np.abs(np.einsum("ij,ij->i", normals, normals) - 1.0) > 1e-6
+    if off_unit.any():  # a zero row would drop that point's detail without a word
+        raise _bad(f"base_normals must be unit vectors ({int(off_unit.sum())} are not, first: row "
+                   f"{int(np.argmax(off_unit))})")
     out["base_normals"] = normals
     labels = get("labels")
     if labels.shape != (k, n):
@@ -437,6 +441,7 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     diffusion_iterations up to 10000 and below what Taubin's lam|mu pair keeps stable. Anything
     else raises ValueError, as does a diffusion that would not give the input back.
     """
+    sheets = flag(sheets, "sheets")
     if mirror is not None:
         arguments = dict(locals())  # every argument, so options added later pass through too
         from .mirror import decompose_mirrored

@@ -180,7 +180,29 @@ def encode(points, base_points, *, base_normals=None, kernel: float = 1.0, neigh
                     max_variation=options.max_variation, base_points=len(b))
     dec = Decomposition(model, origin, settings)
     _require_finite_model(dec)
+    _warn_if_inexact(dec, p)
     return dec
+
+
+# A residual above this share of the model's diagonal is more than rounding: say so.
+INEXACT_ENCODING = 1e-9
+
+
+def _warn_if_inexact(dec, points) -> None:
+    """Warns when reconstruct(dec, [1]) does not give the model back: the residual is in the
+    stats, where nobody looks until the model is wrong."""
+    stats = dec.stats[0] if dec.stats else {}
+    residual = float(stats.get("consistency_residual", 0.0))
+    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    if not residual > INEXACT_ENCODING * diagonal:
+        return
+    pinned = int(stats.get("pinned", 0))
+    share = f"{residual / diagonal:.2g} of its diagonal" if diagonal > 0 else "its points are all at one position"
+    warnings.warn(
+        f"encode: reconstruct at gain 1 misses the model by up to {residual:.3g} ({share}); {pinned} points have no position on the base whose normal passes through them. The model "
+        "reaches beyond the base's centres of curvature or lies far from it: a base nearer the model (such as "
+        "ellipsoid_base(points)) encodes it exactly (stats[0]['consistency_residual'], stats[0]['pinned'])",
+        stacklevel=3)
 
 
 def _encode_options(kernel, neighbors, tolerance, max_iterations, max_variation) -> _core.EncodeOptions:
@@ -220,6 +242,7 @@ def _encode_by_part(points, base_points, labels, count, options, progress) -> De
     _require_finite_model(dec)
     if message:
         warnings.warn(message, stacklevel=3)
+    _warn_if_inexact(dec, p)
     return dec
 
 

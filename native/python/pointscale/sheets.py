@@ -8,6 +8,8 @@ level normal takes only points whose normals make an acute angle with the point'
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 
@@ -45,7 +47,9 @@ def estimated_sides_warning(points: np.ndarray, threads: int = 0) -> str | None:
     from . import _core
     from ._checks import thread_option
     from .surface import estimate_normals
-    normals = estimate_normals(points, threads=threads)
+    with warnings.catch_warnings():  # points without a normal just do not vote
+        warnings.simplefilter("ignore")
+        normals = estimate_normals(points, threads=threads)
     rows = _core.knn_within_parts(points, np.zeros(len(points), dtype=np.int32),
                                   k=min(STACKED_NEIGHBOURS, len(points)), threads=thread_option(threads))
     # Single precision is plenty for these angles, and halves the work.

@@ -1,10 +1,12 @@
 """Single-surface tools: MLS projection (Sec. 2), clustering decimation (Sec. 5.2), normals."""
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from . import _core
-from ._checks import (as_callback, as_points, centre, finite_result, mls_options, number,
+from ._checks import (as_callback, as_points, centre, finite_result, flag, mls_options, number,
                       require_near, require_surface, thread_option)
 
 
@@ -34,7 +36,9 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
     take next (its second fit, at the result, on the result's own neighbours: a second query
     and fit per point, made only for the report); not_converged counts the points whose next
     step exceeds tolerance x h, and passes is 1.
-    Normals are unit and unoriented.
+    Normals are unit and unoriented. A point whose neighbourhood defines no plane (its weights
+    vanish: far from `onto`) stays where it is with a zero normal; without return_report a
+    warning counts such points.
     """
     x = as_points(points)
     mls = mls_options(neighbors, tolerance, max_iterations)
@@ -50,8 +54,7 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
         if len(near) and (near.min() < np.iinfo(np.int32).min or near.max() > np.iinfo(np.int32).max):
             raise ValueError(f"near must index onto: each in [0, {len(s) - 1}], got [{near.min()}, {near.max()}]")
         near = near.astype(np.int32)
-    if not isinstance(single_pass, (bool, np.bool_)):
-        raise ValueError(f"single_pass must be True or False, got {single_pass!r}")
+    single_pass = flag(single_pass, "single_pass")
     origin = centre(s)
     threads = thread_option(threads)
     if single_pass:
@@ -62,7 +65,15 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
     finite_result(nrm, "the projection's normals")
     if return_report:
         return pos, nrm, {"not_converged": int(not_converged), "degenerate": int(degenerate)}
+    _warn_unprojected(int(degenerate), len(x))
     return pos, nrm
+
+
+def _warn_unprojected(degenerate: int, n: int) -> None:
+    if degenerate:
+        warnings.warn(f"project: {degenerate} of {n} points were left where they are, with zero normals: their "
+                      "neighbourhood on `onto` defines no plane (they lie far from it); return_report=True counts "
+                      "them", stacklevel=3)
 
 
 def _single_pass(x, s, origin, kernel, neighbors, tolerance, progress, return_report, threads):
@@ -75,6 +86,7 @@ def _single_pass(x, s, origin, kernel, neighbors, tolerance, progress, return_re
     pos = finite_result(pos + origin, "the projection")
     finite_result(nrm, "the projection's normals")
     if not return_report:
+        _warn_unprojected(int(degenerate), len(x))
         return pos, nrm
     fitted = len(moved) > 0
     report = {"not_converged": int(np.count_nonzero(next_step > tolerance)), "degenerate": int(degenerate),
@@ -102,9 +114,18 @@ def decimate(points, target: int, *, max_variation: float = 0.05):
 def estimate_normals(points, neighbors: int = 16, *, orient: bool = True, threads: int = 0) -> np.ndarray:
     """Unit PCA normals of each point's neighbourhood, consistently oriented (outward on closed
     shapes) by spanning-tree propagation when orient is True. The propagation follows each
-    point's 12 nearest neighbours, or all `neighbors` of its fit when there are fewer. Returns (n, 3)."""
+    point's 12 nearest neighbours, or all `neighbors` of its fit when there are fewer. Returns (n, 3).
+    A point whose neighbours span no plane (all at one position, or on a line) has no normal: its
+    row is zero, and a warning counts such points and names the first."""
     neighbors = number(neighbors, "neighbors", integer=True)
+    orient = flag(orient, "orient")
     p = as_points(points)  # the core checks the neighbours, the count and the surface
-    normals = _core.estimate_normals(p - centre(p), neighbors=neighbors, orient=bool(orient),
+    normals = _core.estimate_normals(p - centre(p), neighbors=neighbors, orient=orient,
                                      threads=thread_option(threads))
-    return finite_result(normals, "the normals")
+    normals = finite_result(normals, "the normals")
+    missing = ~normals.any(axis=1)
+    if missing.any():
+        warnings.warn(f"{int(missing.sum())} of {len(normals)} points have no normal (their {neighbors} neighbours "
+                      f"span no plane: duplicates, or points on a line; the first is point {int(np.argmax(missing))}): "
+                      "their rows are zero", stacklevel=2)
+    return normals

@@ -47,11 +47,11 @@ def parse_gains(text: str, bands: int) -> np.ndarray:
 def mirror_option(args):
     """--mirror, --mirror-origin and --mirror-seam as a pointscale.Mirror, or None."""
     if args.mirror is None:
-        if args.mirror_origin != "0,0,0" or args.mirror_seam is not None:
+        if args.mirror_origin is not None or args.mirror_seam is not None:
             raise ValueError("--mirror-origin and --mirror-seam need --mirror (the axes, e.g. --mirror x)")
         return None
     try:
-        origin = [float(v) for v in args.mirror_origin.split(",")]
+        origin = [float(v) for v in (args.mirror_origin or "0,0,0").split(",")]
     except ValueError:
         raise ValueError(f"--mirror-origin must be three comma-separated numbers, got {args.mirror_origin!r}") from None
     try:
@@ -206,6 +206,9 @@ def cmd_reconstruct(args) -> None:
     with CommandProgress(stages) as progress, StagedOutput() as staged:
         progress.stage("reading")
         dec, source = read_decomposition(Path(args.decomposition))
+        if source is None and Path(args.decomposition).is_dir():
+            warnings.warn(f"the result has points and normals only: {Path(args.decomposition) / SOURCE_FILE}, which "
+                          "keeps the input's faces and attributes, is missing")
         gains = parse_gains(args.gains, dec.n_bands) if args.gains is not None else None  # "" is refused
         template = source if source is not None else io.Scan(points=dec.base)
         check_format_holds(out.suffix.lower(), template, args.decomposition, points=dec.base, shown=out)

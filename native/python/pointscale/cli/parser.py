@@ -102,8 +102,8 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
                         "the half and its reflections are decomposed as one, so the result is exactly symmetric "
                         "and points on a plane stay on it at every level; about twice the time for one plane "
                         "(README, Mirror symmetry)")
-    d.add_argument("--mirror-origin", metavar="X,Y,Z", default="0,0,0",
-                   help="the point the mirror planes pass through, in the file's coordinates")
+    d.add_argument("--mirror-origin", metavar="X,Y,Z",
+                   help="the point the mirror planes pass through, in the file's coordinates (default 0,0,0)")
     d.add_argument("--mirror-seam", metavar="DISTANCE", type=float,
                    help="points this close to a plane are on it (default: 1e-6 of the bounding-box diagonal)")
     d.add_argument("--estimate-normals", action="store_true",
