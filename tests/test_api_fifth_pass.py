@@ -117,3 +117,15 @@ def test_mirror_origin_without_mirror_is_refused_even_at_the_origin(tmp_path):
         line = one_line_error(run_cli("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "out"),
                                       "--mirror-origin", origin))
         assert "--mirror-origin and --mirror-seam need --mirror" in line
+
+
+def test_e57_says_when_far_points_cost_the_others_their_precision(tmp_path):
+    """E57 (through pye57) keeps single precision about the range's centre: 5e-8 on a unit
+    sphere 5e5 from the origin, but one stray point at 1e9 moved every other point by 1.5."""
+    pytest.importorskip("pye57")
+    p = ps.shapes.bumpy_sphere(2000)
+    for points, warned in [(p + [5e5, 0, 0], False), (np.r_[p, [[1e9, 0, 0]]], True)]:
+        _, said = _caught(lambda: ps.io.write(tmp_path / "a.e57", ps.io.Scan(points=points)))
+        error = np.abs(ps.io.read(tmp_path / "a.e57").points - points).max()
+        assert (error > 1e-3) == warned, error
+        assert any("single precision" in m for m in said) == warned, said

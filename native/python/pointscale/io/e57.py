@@ -73,6 +73,7 @@ def write_e57(path, scan: Scan) -> None:
     # centre in the scan's pose, so that coordinates far from the origin keep their precision.
     centre = (scan.points.min(axis=0) + scan.points.max(axis=0)) / 2
     local = scan.points - centre
+    _warn_if_single_precision_loses(path, local)
     data = {"cartesianX": local[:, 0].copy(), "cartesianY": local[:, 1].copy(), "cartesianZ": local[:, 2].copy()}
     kept = set()
     if "intensity" in scan.vertex_attributes:
@@ -96,6 +97,21 @@ def write_e57(path, scan: Scan) -> None:
                 e57.close()
         except Exception as exc:
             raise ValueError(f"{path}: cannot write E57 ({type(exc).__name__}: {_first_line(exc)})") from None
+
+
+def _warn_if_single_precision_loses(path, local: np.ndarray) -> None:
+    """Single precision keeps about 1e-7 of the whole range: fine for a scan, not for one whose
+    range a few far points (outliers, a stray survey mark) stretch. Warns, with the error, when
+    the rounding exceeds 1e-6 of the range that 98% of the points span."""
+    if len(local) == 0:
+        return
+    error = float(np.abs(local.astype(np.float32).astype(np.float64) - local).max())
+    lo, hi = np.percentile(local, [1, 99], axis=0)
+    bulk = float(np.linalg.norm(hi - lo))
+    if error > 1e-6 * bulk:
+        warnings.warn(f"{path}: E57 stores coordinates in single precision, and far points stretch the range: "
+                      f"points are written to within {error:.3g} ({error / bulk:.2g} of the extent of 98% of them); "
+                      "PLY or LAS keep them exactly", stacklevel=4)
 
 
 def _eight_bit(values) -> np.ndarray:
