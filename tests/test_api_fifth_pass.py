@@ -129,3 +129,17 @@ def test_e57_says_when_far_points_cost_the_others_their_precision(tmp_path):
         error = np.abs(ps.io.read(tmp_path / "a.e57").points - points).max()
         assert (error > 1e-3) == warned, error
         assert any("single precision" in m for m in said) == warned, said
+
+
+def test_writing_to_a_symlink_writes_its_target(tmp_path):
+    """A replaced link left the target as it was and the link a plain file."""
+    p = ps.shapes.bumpy_sphere(500)
+    (tmp_path / "data").mkdir()
+    target = tmp_path / "data" / "scan.ply"
+    ps.io.write(target, ps.io.Scan(points=p))
+    link = tmp_path / "latest.ply"
+    link.symlink_to(target)
+    ps.io.write(link, ps.io.Scan(points=p + 1.0))
+    assert link.is_symlink()
+    assert np.array_equal(ps.io.read(target).points, p + 1.0)
+    assert not [f for f in (tmp_path / "data").iterdir() if f.name != "scan.ply"]

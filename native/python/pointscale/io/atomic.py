@@ -17,6 +17,8 @@ def atomic_write(path):
     the extension, since some writers (laspy, trimesh) choose their format by it.
     """
     path = Path(os.fspath(path))
+    if path.is_symlink():  # write through the link, as open() would, not over it
+        path = Path(os.path.realpath(path))
     folder = path.parent if str(path.parent) else Path(".")
     folder.mkdir(parents=True, exist_ok=True)
     handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}", dir=folder)
