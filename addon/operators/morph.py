@@ -54,7 +54,7 @@ def _new_morph_object(context, a_obj, b_obj, p0, pa, pb):
             obj.shape_key_clear()
         _drop_decomposition(obj)
         mesh_io.write_vertices(mesh, p0)
-        obj.matrix_world = a_obj.matrix_world.copy()
+        obj.show_only_shape_key = False  # A's Shape Key Lock would hide the morph's keys
         _shown_collection(context, a_obj).objects.link(obj)
         keys.ensure_basis(obj)
         ka = keys.ensure_key(obj, "A detail", pa, slider=(-1.0, 2.0))

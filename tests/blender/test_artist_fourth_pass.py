@@ -101,3 +101,30 @@ def test_a_non_mesh_object_is_named_in_english(kind, words):
             "CURVE": bpy.data.curves.new("Path", "CURVE")}[kind]
     obj = bpy.data.objects.new("Thing", data)
     assert words in state.mesh_object_problem(obj)
+
+
+def test_the_morph_sits_where_a_is_shown_under_a_constraint_and_shows_its_keys():
+    """The copy of A carries A's constraints and transform: placing it at A's world matrix as well
+    applied a Copy Location offset twice (x = 11 for A at 6); A's Shape Key Lock hid the keys."""
+    import pointscale as ps
+
+    a = h.mesh_object(h.noisy_sphere(3000), name="A")
+    target = bpy.data.objects.new("Target", None)
+    bpy.context.scene.collection.objects.link(target)
+    target.location = (5.0, 0.0, 0.0)
+    follow = a.constraints.new("COPY_LOCATION")
+    follow.target, follow.use_offset = target, True
+    a.location = (1.0, 0.0, 0.0)
+    a.shape_key_add(name="Basis")
+    a.shape_key_add(name="Smile")
+    a.show_only_shape_key = True
+    b = h.mesh_object(ps.shapes.bumpy_sphere(2000, coarse=0.1, fine=0.02), name="B")
+    bpy.context.view_layer.objects.active = a
+    a.data.multiscale.morph_target = b
+    a.data.multiscale.morph_samples = 3000
+    assert bpy.ops.pointscale.morph() == {"FINISHED"}
+    morph = bpy.context.active_object
+    bpy.context.view_layer.update()
+    assert np.abs(np.array(morph.matrix_world) - np.array(a.matrix_world)).max() < 1e-6
+    assert tuple(morph.matrix_world.translation) == pytest.approx((6.0, 0.0, 0.0))
+    assert not morph.show_only_shape_key and a.show_only_shape_key

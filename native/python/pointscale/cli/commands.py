@@ -51,7 +51,7 @@ def mirror_option(args):
             raise ValueError("--mirror-origin and --mirror-seam need --mirror (the axes, e.g. --mirror x)")
         return None
     try:
-        origin = [float(v) for v in (args.mirror_origin or "0,0,0").split(",")]
+        origin = [float(v) for v in (args.mirror_origin if args.mirror_origin is not None else "0,0,0").split(",")]
     except ValueError:
         raise ValueError(f"--mirror-origin must be three comma-separated numbers, got {args.mirror_origin!r}") from None
     try:
