@@ -153,3 +153,15 @@ def edited_bmesh(obj):
     finally:
         bm.free()
     me.update()
+
+
+def morph_onto_bumpy_b(a, samples=3000):
+    """Create Morph of `a` onto a new bumpy sphere 'B' (3000 base samples): the new object."""
+    import pointscale as ps
+
+    b = mesh_object(ps.shapes.bumpy_sphere(2000, coarse=0.1, fine=0.02), name="B")
+    bpy.context.view_layer.objects.active = a
+    a.data.multiscale.morph_target = b
+    a.data.multiscale.morph_samples = samples
+    assert bpy.ops.pointscale.morph() == {"FINISHED"}
+    return bpy.context.active_object

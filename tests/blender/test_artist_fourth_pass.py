@@ -70,18 +70,11 @@ def test_a_mesh_without_loose_vertices_or_edges_gets_no_loose_note(capfd):
 
 
 def test_the_morph_keeps_as_modifiers():
-    import pointscale as ps
-
     a = h.mesh_object(h.noisy_sphere(3000), name="A")
     mirror = a.modifiers.new("Mirror", "MIRROR")
     mirror.use_axis = (True, False, False)
     a.modifiers.new("Smooth", "SMOOTH")
-    b = h.mesh_object(ps.shapes.bumpy_sphere(2000, coarse=0.1, fine=0.02), name="B")
-    bpy.context.view_layer.objects.active = a
-    a.data.multiscale.morph_target = b
-    a.data.multiscale.morph_samples = 3000
-    assert bpy.ops.pointscale.morph() == {"FINISHED"}
-    morph = bpy.context.active_object
+    morph = h.morph_onto_bumpy_b(a)
     assert morph is not a and morph.name == "A x B"
     assert [(m.name, m.type) for m in morph.modifiers] == [("Mirror", "MIRROR"), ("Smooth", "SMOOTH")]
     assert tuple(morph.modifiers["Mirror"].use_axis) == (True, False, False)
@@ -106,8 +99,6 @@ def test_a_non_mesh_object_is_named_in_english(kind, words):
 def test_the_morph_sits_where_a_is_shown_under_a_constraint_and_shows_its_keys():
     """The copy of A carries A's constraints and transform: placing it at A's world matrix as well
     applied a Copy Location offset twice (x = 11 for A at 6); A's Shape Key Lock hid the keys."""
-    import pointscale as ps
-
     a = h.mesh_object(h.noisy_sphere(3000), name="A")
     target = bpy.data.objects.new("Target", None)
     bpy.context.scene.collection.objects.link(target)
@@ -118,12 +109,7 @@ def test_the_morph_sits_where_a_is_shown_under_a_constraint_and_shows_its_keys()
     a.shape_key_add(name="Basis")
     a.shape_key_add(name="Smile")
     a.show_only_shape_key = True
-    b = h.mesh_object(ps.shapes.bumpy_sphere(2000, coarse=0.1, fine=0.02), name="B")
-    bpy.context.view_layer.objects.active = a
-    a.data.multiscale.morph_target = b
-    a.data.multiscale.morph_samples = 3000
-    assert bpy.ops.pointscale.morph() == {"FINISHED"}
-    morph = bpy.context.active_object
+    morph = h.morph_onto_bumpy_b(a)
     bpy.context.view_layer.update()
     assert np.abs(np.array(morph.matrix_world) - np.array(a.matrix_world)).max() < 1e-6
     assert tuple(morph.matrix_world.translation) == pytest.approx((6.0, 0.0, 0.0))

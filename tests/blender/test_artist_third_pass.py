@@ -212,8 +212,6 @@ def test_a_failed_morph_leaves_no_object_behind(monkeypatch):
 
 
 def test_the_morph_copy_keeps_the_artists_data_and_drops_the_add_ons():
-    import pointscale as ps
-
     a = h.mesh_object(h.noisy_sphere(3000), name="A")
     n = len(a.data.vertices)
     a.data.attributes.new("ms_detail_sculpt", "FLOAT", "POINT")
@@ -224,12 +222,7 @@ def test_the_morph_copy_keeps_the_artists_data_and_drops_the_add_ons():
     assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
     assert a.vertex_groups.get("Folds") is not None
     assert bpy.ops.pointscale.paint_band_mask(band=1, enter_paint=False) == {"FINISHED"}
-    b = h.mesh_object(ps.shapes.bumpy_sphere(2000, coarse=0.1, fine=0.02), name="B")
-    bpy.context.view_layer.objects.active = a
-    a.data.multiscale.morph_target = b
-    a.data.multiscale.morph_samples = 3000
-    assert bpy.ops.pointscale.morph() == {"FINISHED"}
-    morph = bpy.context.active_object
+    morph = h.morph_onto_bumpy_b(a)
     assert morph.name == "A x B" and len(morph.data.vertices) == n
     assert morph.data.attributes.get("ms_detail_sculpt") is not None
     assert not [x.name for x in morph.data.attributes if x.name.startswith(("ms_detail_", ".ps."))
