@@ -155,3 +155,22 @@ def test_writing_to_a_symlink_writes_its_target(tmp_path):
     assert link.is_symlink()
     assert np.array_equal(ps.io.read(target).points, p + 1.0)
     assert not [f for f in (tmp_path / "data").iterdir() if f.name != "scan.ply"]
+
+
+def test_an_option_error_is_one_line_too(tmp_path):
+    """argparse printed its 11-line usage block before the error."""
+    from helpers import one_line_error
+    line = one_line_error(run_cli("decompose", str(tmp_path / "scan.laz")))
+    assert "the following arguments are required: -o/--output" in line and "--help" in line
+    assert "invalid choice: 'bogus'" in one_line_error(run_cli("bogus"))
+
+
+def test_a_negative_mirror_origin_is_a_value(tmp_path):
+    """'--mirror-origin -0.03,0,0' read the value as an option (the bunny's centre has x = -0.027)."""
+    p = ps.shapes.bumpy_sphere(4000)
+    half = p[p[:, 0] >= -0.03]
+    ps.io.write(tmp_path / "half.ply", ps.io.Scan(points=half))
+    done = run_cli("decompose", str(tmp_path / "half.ply"), "-o", str(tmp_path / "out"), "--levels", "3",
+                   "--mirror", "x", "--mirror-origin", "-0.03,0,0")
+    assert done.returncode == 0, done.stderr
+    assert ps.load(tmp_path / "out" / "decomposition.npz").settings["mirror"]["origin"][0] == -0.03

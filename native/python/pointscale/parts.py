@@ -389,8 +389,8 @@ def parts_warning(reports: list[dict], levels: int) -> str | None:
     named = "; ".join(_described(r) for r in short[:_NAMED_IN_WARNING])
     more = len(short) - _NAMED_IN_WARNING
     tail = f"; and {more} smaller part{'s' if more > 1 else ''}" if more > 0 else ""
-    verb, their, its = ("parts are", "Their", "their") if len(short) > 1 else ("part is", "Its", "its")
-    return (f"{len(short)} of {len(reports)} connected {verb} too small for levels={levels}: {named}{tail}. "
+    verb, their, its = ("are", "Their", "their") if len(short) > 1 else ("is", "Its", "its")
+    return (f"{len(short)} of {len(reports)} connected parts {verb} too small for levels={levels}: {named}{tail}. "
             f"{their} coarser levels repeat {its} smoothest one, so {its} bands there are zero.")
 
 

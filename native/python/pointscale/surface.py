@@ -22,7 +22,10 @@ def project(points, onto, *, kernel: float = 1.0, neighbors: int = 24, tolerance
             step x r / (1 - r) is; max_iterations caps the iterations
     near    optional (n,) index into `onto` of a sample near each point, such as the labels
             from decimate(points) when `onto` is its centroids: the points around one sample
-            then share one neighbour query. Only a speed-up; the result does not change.
+            then share one neighbour query. Only a speed-up: a point whose iteration converges
+            ends where it would without; one that does not converge (it cycles; see
+            return_report) may stop elsewhere in its cycle, since its sums are taken in another
+            order.
     single_pass  one plane fit at each point and one projection onto it, as PCL's and Open3D's
             MLS smoothing do, instead of iterating to the MLS surface: one neighbour query per
             point, and no iteration (tolerance and max_iterations then only set what the

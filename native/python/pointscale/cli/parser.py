@@ -8,7 +8,7 @@ from .. import __version__
 
 # Options whose value may start with a minus sign (a negative gain): argparse would take
 # "--gains -1,1,1" for two options, so main() joins such pairs into "--gains=-1,1,1" first.
-OPTIONS_WITH_SIGNED_VALUES = ("--gains",)
+OPTIONS_WITH_SIGNED_VALUES = ("--gains", "--mirror-origin")
 
 
 class _Formatter(argparse.HelpFormatter):
@@ -65,8 +65,16 @@ def demo_points(text: str) -> int:
     return value
 
 
+class _OneLineErrors(argparse.ArgumentParser):
+    """An option error as one line and exit code 2, as every other error: argparse would print
+    the whole usage block first. --help still shows it."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser(formats: str) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _OneLineErrors(
         prog="pointscale", formatter_class=_Formatter, allow_abbrev=False,
         description="Multiscale point-sampled surfaces (Pauly, Kobbelt, Gross 2006): split a scan or mesh into a "
                     "smooth base and detail bands, filter the bands, carry the detail onto an edited base.",
