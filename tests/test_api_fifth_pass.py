@@ -97,7 +97,7 @@ def test_a_mirror_with_seam_zero_keeps_off_plane_points_off_the_plane():
     """seam=0 (only points exactly on the plane are seam points): an off-plane point a gain pulls
     across the plane was put exactly on it (4 of 6,241 at gains -2), where Blender merges it."""
     from pointscale import meshes
-    v, _ = meshes.uv_sphere(1.0, 120, 60)
+    v, _ = meshes.uv_sphere(1.0, 160, 80)
     v = meshes.bumpy(v, 0.05, 5.0)
     v[np.abs(v[:, 0]) < 1e-12, 0] = 0.0
     half = v[v[:, 0] >= 0]
