@@ -8,6 +8,7 @@
 #include <new>
 #include <queue>
 
+#include "pointscale/detail/thin_sheets.h"
 #include "pointscale/parallel.h"
 
 namespace pointscale {
@@ -66,27 +67,25 @@ Moments normal_moments(const Working& w, std::size_t begin, std::size_t end) {
 // through 180 degrees (a wall's rim) and 0.5 over a whole hemisphere.
 constexpr double one_sided_agreement = 0.6;
 
-// A point whose normal is more than 120 degrees from its cluster's mean faces the other way, as
-// the projection's side test (thin_sheets.h) has it. A cluster of a few points of one side and
-// many of the other keeps a long mean, so the mean alone misses it; its centroid then stands
-// for the wrong side in the other side's fits (on a hollow sphere one spacing thick, the sides
-// crossed at level 0).
-constexpr double facing_away = -0.5;
-
 // How many final clusters' worth of points a cluster split by side may hold (Working).
 constexpr std::size_t side_split_sizes = 8;
 
+// Whether a point faces the other way from its cluster's mean, by the projection's side test
+// (same_side, thin_sheets.h). A cluster of a few points of one side and many of the other
+// keeps a long mean, so the mean alone misses it; its centroid then stands for the wrong side
+// in the other side's fits (on a hollow sphere one spacing thick, the sides crossed at level 0).
 bool some_point_faces_away(const Working& w, std::size_t begin, std::size_t end, const Vec3& mean) {
   const Vec3 u = mean.normalized();
   for (std::size_t i = begin; i < end; ++i)
-    if (w.nrm[3 * i] * u.x() + w.nrm[3 * i + 1] * u.y() + w.nrm[3 * i + 2] * u.z() < facing_away) return true;
+    if (!same_side(w.nrm[3 * i] * u.x() + w.nrm[3 * i + 1] * u.y() + w.nrm[3 * i + 2] * u.z())) return true;
   return false;
 }
 
 // A cluster whose normals disagree is split by the side they face: along the main axis of their
 // outer products, the direction the two sides of a wall face, at first priority, since its
 // centroid lies between the sides, off both.
-void describe_sides(Cluster& c, const Working& w, std::size_t begin, std::size_t end, const Moments& normals) {
+void describe_sides(Cluster& c, const Working& w, std::size_t begin, std::size_t end) {
+  const Moments normals = normal_moments(w, begin, end);
   const auto count = static_cast<double>(end - begin);
   const Vec3 mean(normals.s[0] / count, normals.s[1] / count, normals.s[2] / count);
   if (count < 2) return;
@@ -132,7 +131,7 @@ Cluster whole(const Working& w, double max_variation) {
   Moments sums;
   for (std::size_t i = 0; i < n; ++i) sums.add(&w.xyz[3 * i], ref);
   describe(c, ref, static_cast<double>(n), sums, max_variation);
-  if (!w.nrm.empty()) describe_sides(c, w, 0, n, normal_moments(w, 0, n));
+  if (!w.nrm.empty()) describe_sides(c, w, 0, n);
   return c;
 }
 
@@ -228,8 +227,8 @@ bool split(Cluster& c, Working& w, ClusterStore& store, double max_variation) {
   describe(*a, o, static_cast<double>(lo - c.begin), below_sums, max_variation);
   describe(*b, o, static_cast<double>(c.end - lo), above_sums, max_variation);
   if (sheets) {
-    describe_sides(*a, w, c.begin, lo, normal_moments(w, c.begin, lo));
-    describe_sides(*b, w, lo, c.end, normal_moments(w, lo, c.end));
+    describe_sides(*a, w, c.begin, lo);
+    describe_sides(*b, w, lo, c.end);
   }
   c.child[0] = a;
   c.child[1] = b;
