@@ -21,7 +21,8 @@ std::uint32_t weight_key(double dot) {
 
 }  // namespace
 
-std::vector<SignedEdge> angle_sorted_edges(const IndexList& rows, int width, const Points& normals) {
+std::vector<SignedEdge> angle_sorted_edges(const IndexList& rows, int width, const Points& normals,
+                                           const Points* points) {
   const std::size_t n = static_cast<std::size_t>(normals.rows());
   std::vector<SignedEdge> edges;
   if (n == 0 || width <= 0) return edges;
@@ -44,7 +45,10 @@ std::vector<SignedEdge> angle_sorted_edges(const IndexList& rows, int width, con
           const Index* other = rows.data() + j * width;
           if (std::find(other, other + width, static_cast<Index>(i)) != other + width) continue;
         }
-        const double dot = ni.dot(normals.row(static_cast<Eigen::Index>(j)));
+        const double dot =
+            points ? edge_agreement(ni, normals.row(static_cast<Eigen::Index>(j)), points->row(static_cast<Eigen::Index>(i)),
+                                    points->row(static_cast<Eigen::Index>(j)), true)
+                   : ni.dot(normals.row(static_cast<Eigen::Index>(j)));
         emit(weight_key(dot), static_cast<std::uint32_t>(i),
              static_cast<std::uint32_t>(j) | (dot < 0.0 ? 0x80000000u : 0u));
       }

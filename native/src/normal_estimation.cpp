@@ -30,12 +30,12 @@ Points pca_normals(const SpatialIndex& index, int k, const ProgressStage& stage)
   return pca_normals(index, k, 0, none, stage);
 }
 
-void orient_normals(const SpatialIndex& index, Points& normals, int k) {
+void orient_normals(const SpatialIndex& index, Points& normals, int k, bool reflect) {
   const Index n = index.size();
   if (n == 0) return;
   IndexList graph = knn_graph(index, k);
   k = static_cast<int>(graph.size() / n);
-  orient_along_spanning_tree(index.points(), normals, std::move(graph), k);
+  orient_along_spanning_tree(index.points(), normals, std::move(graph), k, reflect);
 }
 
 }  // namespace pointscale

@@ -9,13 +9,13 @@
 
 namespace pointscale {
 
-void orient_along_spanning_tree(const Points& points, Points& normals, IndexList&& rows, int width) {
+void orient_along_spanning_tree(const Points& points, Points& normals, IndexList&& rows, int width, bool reflect) {
   const std::size_t n = static_cast<std::size_t>(points.rows());
   if (n == 0) return;
   std::vector<SignedEdge> edges;
   {
     const IndexList graph = std::move(rows);
-    edges = angle_sorted_edges(graph, width, normals);
+    edges = angle_sorted_edges(graph, width, normals, reflect ? &points : nullptr);
   }
   // Kruskal: an edge joins two pieces of the forest only if no lighter path joins them, and
   // then it fixes their relative sign. One thread: each join depends on all lighter ones.

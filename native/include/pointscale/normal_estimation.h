@@ -16,7 +16,9 @@ Points pca_normals(const SpatialIndex& index, int k, int width, IndexList& rows,
 
 // Flips rows of `normals` (#P by 3) so that they agree along a minimum spanning tree of the
 // k-nearest-neighbour graph weighted by 1 - |n_i . n_j| (orient_along_spanning_tree), so
-// that closed shapes end up with outward normals.
-void orient_normals(const SpatialIndex& index, Points& normals, int k);
+// that closed shapes end up with outward normals. reflect: weigh and sign each edge by one
+// normal reflected across the plane halfway between the points (angle_sorted_edges.h), for a
+// graph that reaches across thin parts.
+void orient_normals(const SpatialIndex& index, Points& normals, int k, bool reflect = false);
 
 }  // namespace pointscale

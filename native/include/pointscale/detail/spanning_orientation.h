@@ -14,6 +14,8 @@ namespace pointscale {
 // turns outward by a vote of all its points, sum of n_i . (p_i - centroid of all points): the
 // point farthest from the centroid alone is often an outlier whose normal lies nearly in the
 // tangent plane. Closed shapes end up with outward normals.
-void orient_along_spanning_tree(const Points& points, Points& normals, IndexList&& rows, int width);
+// reflect  weigh and sign each edge by the reflected normal (angle_sorted_edges)
+void orient_along_spanning_tree(const Points& points, Points& normals, IndexList&& rows, int width,
+                                bool reflect = false);
 
 }  // namespace pointscale
