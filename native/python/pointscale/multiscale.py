@@ -192,11 +192,15 @@ def load(path) -> Decomposition:
     do not make a decomposition, raises ValueError."""
     if not isinstance(path, (str, bytes, os.PathLike)):
         raise ValueError(f"load needs the path of a decomposition file, got {type(path).__name__}")
+    from .io.scan import require_regular_file
     if os.path.isdir(os.fspath(path)):
         raise ValueError(f"cannot read decomposition {path!s}: it is a folder, not a file")
-    try:
+    try:  # before open(): a named pipe would block it until someone writes, a device never ends
+        require_regular_file(os.fspath(path))
         with open(os.fspath(path), "rb") as head:
             magic = head.read(6)
+    except ValueError as exc:
+        raise ValueError(f"cannot read decomposition {path!s}: {exc}") from None
     except OSError as exc:
         raise ValueError(f"cannot read decomposition {path!s}: {exc.strerror or exc}") from None
     if not magic.startswith((b"PK\x03\x04", b"PK\x05\x06", b"\x93NUMPY")):
@@ -208,6 +212,7 @@ def load(path) -> Decomposition:
         if not isinstance(f, np.lib.npyio.NpzFile):
             raise ValueError("it holds one array, not the arrays of a decomposition (.npz)")
         with f:
+            _check_archive_sizes(f)
             arrays = dict(f)
     except MemoryError:  # a crafted header can declare any size: say which file
         raise ValueError(f"cannot read decomposition {path!s}: its arrays declare more data than fits in "
@@ -216,6 +221,58 @@ def load(path) -> Decomposition:
         detail = " ".join(str(exc).split()) or type(exc).__name__
         raise ValueError(f"cannot read decomposition {path!s}: {detail}") from None
     return Decomposition.from_dict(arrays)
+
+
+# What each entry of a decomposition file (Decomposition.to_dict) may hold for n points and k
+# bands, in bytes: 8 a number (the widest the checks accept), 1 a byte of JSON text (settings,
+# stats), which is generous for a part report per part and a stats row per level.
+_NUMBER, _JSON_BYTES, _JSON_BYTES_PER_POINT = 8, 1 << 20, 1024
+_NPY_HEADER = 10000  # the largest .npy header numpy parses by default; a saved one is ~128 bytes
+
+
+def _check_archive_sizes(npz) -> None:
+    """Refuses, before any array is unpacked, a decomposition file with entries it does not
+    write, or an entry that declares more bytes (ZipInfo.file_size, which also caps what reading
+    it decompresses) than a decomposition of its points and bands can hold. The point and band
+    counts come from the .npy headers of base (n, 3) and details (k, n), a few hundred bytes
+    each. Unchecked, a crafted file unpacks what it declares: 4 MB of deflated zeros are 4 GB."""
+    from .io.scan import npz_entries
+    entries = npz_entries(npz.zip)
+    n, k = _declared_counts(npz.zip, entries)
+    json_bytes = _JSON_BYTES + _JSON_BYTES_PER_POINT * n
+    allowed = {"base": 3 * n * _NUMBER, "base_normals": 3 * n * _NUMBER, "details": k * n * _NUMBER,
+               "labels": k * n * _NUMBER, "parts": n * _NUMBER, "mirror_seam": 3 * n, "origin": 3 * _NUMBER,
+               "format_version": _NUMBER, "settings": json_bytes, "stats": json_bytes}
+    for band in range(k):  # a band's clusters each own a point (its anchor): at most n of them
+        allowed.update({f"neighborhoods_{band}": n * min(n, MAX_NEIGHBORS) * _NUMBER, f"kernel_{band}": n * _NUMBER,
+                        f"anchors_{band}": n * _NUMBER, f"frames_{band}": 2 * n * _NUMBER,
+                        f"local_{band}": 3 * n * _NUMBER})
+    unknown = sorted(name for name in entries if name not in allowed)
+    if unknown:
+        raise ValueError(f"it holds entries a decomposition file does not: {', '.join(unknown[:5])}"
+                         f"{' ...' if len(unknown) > 5 else ''}; refused unread")
+    for name, info in entries.items():
+        if info.file_size > _NPY_HEADER + allowed[name]:
+            raise ValueError(f"its entry {name!r} declares {info.file_size} bytes, more than a decomposition of "
+                             f"{n} points and {k} bands holds there ({_NPY_HEADER + allowed[name]}); refused unread")
+
+
+def _declared_counts(archive, entries) -> tuple[int, int]:
+    """(n, k): the points and bands the headers of base (n, 3) and details (k, n) declare."""
+    from .io.scan import npy_shape
+    for key in ("base", "details"):
+        if key not in entries:
+            raise ValueError(f"not a pointscale decomposition: missing {key!r}")
+    base_shape, _ = npy_shape(archive, entries["base"])
+    if len(base_shape) != 2 or base_shape[1] != 3 or base_shape[0] < 1:
+        raise _bad(f"base must have shape (n, 3) with n >= 1, got {base_shape}")
+    n = base_shape[0]
+    details_shape, _ = npy_shape(archive, entries["details"])
+    if len(details_shape) != 2 or details_shape[1] != n:  # the words of _checked_arrays, which says it later
+        raise _bad(f"details must have shape (k, {n}), got {details_shape}")
+    if not 1 <= details_shape[0] < MAX_LEVELS:
+        raise _bad(f"details has {details_shape[0]} bands; 1 to {MAX_LEVELS - 1} are supported")
+    return n, details_shape[0]
 
 
 def _bad(what: str):

@@ -46,8 +46,11 @@ def model_file(path: Path) -> Path:
     return path / DECOMPOSITION_FILE if path.is_dir() else path
 
 
-def read_source(path: Path):
-    """The input's attributes saved beside a decomposition, or None for a folder without them."""
+def read_source(path: Path, n_points: int | None = None):
+    """The input's attributes saved beside a decomposition, or None for a folder without them.
+    n_points, the decomposition's own point count, sizes what source.npz may unpack: the count
+    source.npz declares is the file's word about itself, and a crafted one would let it unpack
+    gigabytes (4 KB a point) before anything else is checked."""
     folder = model_file(path).parent
     source = folder / SOURCE_FILE
     if source.exists() and not source.is_file():  # read as absent, the result would lose every attribute
@@ -55,7 +58,7 @@ def read_source(path: Path):
                          "input's attributes and faces")
     if source.is_file():
         try:
-            return io.Scan.from_arrays(source)
+            return io.Scan.from_arrays(source, n_points=n_points)
         except ValueError:
             raise
         except Exception as exc:  # zip and header errors of a damaged or crafted file
@@ -72,7 +75,7 @@ def read_decomposition(path: Path):
     if not file.is_file():
         raise ValueError(f"no decomposition at {path} (expected a folder holding {DECOMPOSITION_FILE}, or the file)")
     dec = load(file)
-    source = read_source(path)
+    source = read_source(path, dec.n_points)
     if source is not None and source.n_points != dec.n_points:
         raise ValueError(f"{file.parent / SOURCE_FILE} describes {source.n_points} points, "
                          f"the decomposition {dec.n_points}: the folder mixes two runs")

@@ -19,7 +19,7 @@ import numpy as np
 
 from . import e57, las, mesh_formats, ply, text
 from .atomic import atomic_write
-from .scan import Scan
+from .scan import Scan, require_regular_file
 
 # extension -> (reader, writer)
 _FORMATS = {
@@ -44,6 +44,11 @@ def read(path) -> Scan:
     """The Scan in the file at path, the format chosen by its extension (case-insensitive)."""
     if os.path.isdir(os.fspath(path)):
         raise ValueError(f"{os.fspath(path)} is a folder, not a file")
+    if os.path.exists(os.fspath(path)):  # a missing file: each reader says "no such file"
+        try:
+            require_regular_file(os.fspath(path))  # a named pipe would block, a device never end
+        except ValueError as exc:
+            raise ValueError(f"{os.fspath(path)}: {exc}") from None
     return _format(path)[0](os.fspath(path))
 
 

@@ -3,8 +3,14 @@
 
 Every scan of the file is read with its pose applied (world coordinates) and concatenated; when
 the file has more than one scan, vertex attribute scan_id (uint16) says which each point came
-from. Intensity (float64) and colours (colorRed/Green/Blue as red, green, blue uint8) are kept.
-Written: one scan, intensity and colours; pye57 stores coordinates as float32, so they are
+from. Every point field pye57 reads is kept: intensity (float64), colours (colorRed/Green/Blue
+as red, green, blue uint8) and a structured scan's rowIndex and columnIndex (uint16). A field
+that only some scans have is kept for all, filled with 0 in the scans without it, and a warning
+names the field and those scans.
+Written: one scan with intensity, colours, and rowIndex/columnIndex when the scan has both.
+pye57 writes colours as 0..255: 8-bit values are written as they are, also from 16-bit fields
+when every value is at most 255 (as many photogrammetry exporters store them in LAS); 16-bit
+colours are scaled to 8 bits with a warning. Coordinates are float32 in pye57, so they are
 written relative to the bounding-box centre, which becomes the scan's pose translation (error
 about 1e-7 of the extent, however far the scan is from the origin). Other attributes and normals
 are dropped with a warning. Spherical-coordinate scans are read through pye57's
@@ -19,8 +25,18 @@ import numpy as np
 
 from .atomic import atomic_write
 from .scan import Scan
+from .text_tables import eight_bit_colours
 
 _COLOURS = (("colorRed", "red"), ("colorGreen", "green"), ("colorBlue", "blue"))
+# The point fields besides coordinates that pye57 reads, by E57 name: (attribute name, dtype).
+_FIELDS = {"intensity": ("intensity", np.float64), "colorRed": ("red", np.uint8), "colorGreen": ("green", np.uint8),
+           "colorBlue": ("blue", np.uint8), "rowIndex": ("rowIndex", np.uint16),
+           "columnIndex": ("columnIndex", np.uint16)}
+_GRID = ("rowIndex", "columnIndex")
+# What the reader uses: coordinates (spherical ones converted), the fields above, and the
+# invalid-state flags, by which pye57 leaves out the points without a return.
+_READ = {"cartesianX", "cartesianY", "cartesianZ", "sphericalRange", "sphericalAzimuth", "sphericalElevation",
+         "cartesianInvalidState", "sphericalInvalidState", *_FIELDS}
 
 
 def _pye57(action: str):
@@ -39,8 +55,10 @@ def read_e57(path) -> Scan:
     try:
         e57 = pye57.E57(path)
         try:
-            scans = [e57.read_scan(i, intensity=True, colors=True, transform=True, ignore_missing_fields=True)
+            scans = [e57.read_scan(i, intensity=True, colors=True, row_column=True, transform=True,
+                                   ignore_missing_fields=True)
                      for i in range(e57.scan_count)]
+            unread = sorted({f for i in range(e57.scan_count) for f in e57.get_header(i).point_fields} - _READ)
         finally:
             e57.close()
     except Exception as exc:  # libE57 raises E57Exception on damaged files
@@ -54,16 +72,35 @@ def read_e57(path) -> Scan:
         raise ValueError(f"{path}: no points")
     if not np.isfinite(points).all():
         raise ValueError(f"{path}: non-finite coordinates")
-    attributes = {}
-    if all("intensity" in s for s in scans):
-        attributes["intensity"] = np.concatenate([s["intensity"] for s in scans]).astype(np.float64)
-    if all(field in s for s in scans for field, _ in _COLOURS):
-        for field, name in _COLOURS:
-            attributes[name] = np.concatenate([s[field] for s in scans]).astype(np.uint8)
+    if unread:  # timeStamp, the is...Invalid flags: fields pye57's reader does not offer
+        warnings.warn(f"{path}: E57 point fields {', '.join(unread)} are not read (pye57 does not read them)",
+                      stacklevel=3)
+    attributes = _fields_of_every_scan(path, scans)
     if len(scans) > 1:
         attributes["scan_id"] = np.repeat(np.arange(len(scans), dtype=np.uint16), [len(s["cartesianX"]) for s in scans])
     return Scan(points=points, precision=np.float64, vertex_attributes=attributes,
                 format_info={"format": "e57", "scans": len(scans)})
+
+
+def _fields_of_every_scan(path: str, scans: list) -> dict:
+    """Attribute name -> values over all scans, for every field any scan has. A scan without a
+    field gets 0 there (no return, black, row 0), said in one warning per set of such scans:
+    dropping the field would lose it for the scans that have it, silently."""
+    attributes, missing = {}, {}
+    for field, (name, dtype) in _FIELDS.items():
+        if not any(field in s for s in scans):
+            continue
+        lacking = tuple(i for i, s in enumerate(scans) if field not in s)
+        attributes[name] = np.concatenate([np.asarray(s[field]).astype(dtype) if field in s
+                                           else np.zeros(len(s["cartesianX"]), dtype) for s in scans])
+        if lacking:
+            missing.setdefault(lacking, []).append(name)
+    for lacking, names in missing.items():
+        which = ", ".join(str(i) for i in lacking)
+        warnings.warn(f"{path}: scan{'s' if len(lacking) > 1 else ''} {which} of {len(scans)} "
+                      f"{'have' if len(lacking) > 1 else 'has'} no {', '.join(names)}, which the other scans have; "
+                      f"filled with 0 there (scan_id tells the scans apart)", stacklevel=4)
+    return attributes
 
 
 def write_e57(path, scan: Scan) -> None:
@@ -80,13 +117,20 @@ def write_e57(path, scan: Scan) -> None:
         data["intensity"] = np.asarray(scan.vertex_attributes["intensity"], dtype=np.float64)
         kept.add("intensity")
     if all(name in scan.vertex_attributes for _, name in _COLOURS):
+        colours, loss = eight_bit_colours({name: scan.vertex_attributes[name] for _, name in _COLOURS}, path)
         for field, name in _COLOURS:
-            data[field] = _eight_bit(scan.vertex_attributes[name])
+            data[field] = colours[name]
         kept |= {name for _, name in _COLOURS}
+        if loss:
+            warnings.warn(f"{path}: E57 (as pye57 writes it) holds 8-bit colours: {loss}", stacklevel=3)
+    if _grid_fits(scan):  # a structured scan's row and column, which pye57 stores as uint16
+        for name in _GRID:
+            data[name] = np.asarray(scan.vertex_attributes[name]).astype(np.uint16)
+        kept |= set(_GRID)
     dropped = [n for n in scan.vertex_attributes if n not in kept] + (["normals"] if scan.normals is not None else [])
     if dropped:
-        warnings.warn(f"{path}: E57 writing keeps intensity and colours only; {', '.join(dropped)} not written",
-                      stacklevel=3)
+        warnings.warn(f"{path}: E57 writing keeps intensity, colours, rowIndex and columnIndex only; "
+                      f"{', '.join(dropped)} not written", stacklevel=3)
     with atomic_write(path) as temporary:
         os.unlink(temporary)  # libE57 refuses to open an existing file for writing
         try:
@@ -114,13 +158,12 @@ def _warn_if_single_precision_loses(path, local: np.ndarray) -> None:
                       "PLY or LAS keep them exactly", stacklevel=4)
 
 
-def _eight_bit(values) -> np.ndarray:
-    values = np.asarray(values)
-    if values.dtype == np.uint16:
-        return (values // 257).astype(np.uint8)
-    if values.dtype.kind == "f" and values.max(initial=0) <= 1.0:
-        return np.round(values * 255).astype(np.uint8)
-    return values.astype(np.uint8)
+def _grid_fits(scan: Scan) -> bool:
+    """Whether the scan has rowIndex and columnIndex that pye57's uint16 fields hold unchanged."""
+    columns = [scan.vertex_attributes.get(name) for name in _GRID]
+    if any(c is None or np.asarray(c).ndim != 1 or np.asarray(c).dtype.kind not in "iub" for c in columns):
+        return False
+    return all(c.size == 0 or (int(c.min()) >= 0 and int(c.max()) <= 65535) for c in map(np.asarray, columns))
 
 
 def _first_line(exc: Exception) -> str:

@@ -4,6 +4,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import stat
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -122,17 +123,23 @@ class Scan:
         return arrays
 
     @classmethod
-    def from_arrays(cls, arrays, points=None, normals=None) -> "Scan":
+    def from_arrays(cls, arrays, points=None, normals=None, *, n_points: int | None = None) -> "Scan":
         """The Scan that to_arrays gave, from that dict or from an .npz file (a path, opened with
         allow_pickle=False). Points are (n, 3) NaN unless given: call with_geometry before writing.
         Normals are the ones given, else those the arrays keep, else None.
+        n_points: the number of points the caller knows the scan has (a decomposition's); a file
+        that says otherwise is refused unread, and its size budget comes from this count, not
+        from the count the file declares about itself. Defaults to len(points) when given.
         Raises ValueError for anything missing, damaged or not plain numbers."""
+        if n_points is None and points is not None:
+            n_points = len(np.asarray(points))
         if isinstance(arrays, (str, os.PathLike)):
             try:
+                require_regular_file(arrays)
                 with np.load(arrays, allow_pickle=False) as loaded:
                     if not isinstance(loaded, Mapping):
                         raise ValueError("not an .npz archive")
-                    _check_archive(loaded)
+                    _check_archive(loaded, n_points)
                     return cls.from_arrays({k: _plain(loaded, k) for k in loaded.files}, points, normals)
             except (OSError, ValueError, EOFError) as exc:
                 raise ValueError(f"cannot read scan attributes from {os.fspath(arrays)}: {exc}") from None
@@ -143,22 +150,27 @@ class Scan:
 
 # What a Scan's archive may hold, decompressed: far more than any file's attributes take (100
 # float64 properties a point are 800 bytes), and far less than a crafted archive can declare: a
-# megabyte of deflated zeros unpacks to a gigabyte.
+# megabyte of deflated zeros unpacks to a gigabyte. The points' share is counted from a point
+# count the caller knows (a decomposition's), never only from the count the archive declares.
 _BYTES_PER_POINT = 4096
+# Besides the per-point entries: the format's own bytes (LAS VLRs and EVLRs, which may carry a
+# survey's metadata) and the meta_json; .npy headers and small meshes fit in _PER_POINT_SLACK.
 _BYTES_BESIDES = 256 << 20
+_PER_POINT_SLACK = 1 << 20
+_MAX_META = 64 << 20
 
 
-def _check_archive(loaded) -> None:
+def _check_archive(loaded, n_expected: int | None = None) -> None:
     """Refuses, before any entry but the small meta_json is decompressed, an .npz whose entries
-    are not the ones its meta_json names, or whose entries together declare more bytes than its
-    points can take (_BYTES_PER_POINT). The sizes are the archive's own, which also cap what
-    reading an entry decompresses."""
-    infos = {info.filename[:-4] if info.filename.endswith(".npy") else info.filename: info
-             for info in loaded.zip.infolist()}
+    are not the ones its meta_json names, whose point count is not n_expected (when the caller
+    knows it), or whose entries declare more bytes than its points can take (_BYTES_PER_POINT;
+    the format bytes may add _BYTES_BESIDES). The sizes are the archive's own (ZipInfo.file_size),
+    which also cap what reading an entry decompresses."""
+    infos = npz_entries(loaded.zip)
     meta_info = infos.get(_META_KEY)
     if meta_info is None:
         raise ValueError(f"scan arrays lack {_META_KEY!r}")
-    if meta_info.file_size > 64 << 20:
+    if meta_info.file_size > _MAX_META:
         raise ValueError(f"{_META_KEY} declares {meta_info.file_size} bytes")
     try:
         meta = json.loads(_as_bytes(_plain(loaded, _META_KEY), _META_KEY).decode("utf-8"))
@@ -166,15 +178,69 @@ def _check_archive(loaded) -> None:
         vertex_count, face_count = len(meta["vertex_attributes"]), len(meta["face_attributes"])
     except (KeyError, TypeError, ValueError, UnicodeDecodeError, RecursionError) as exc:
         raise ValueError(f"scan arrays: damaged {_META_KEY} ({type(exc).__name__}: {exc})") from None
+    if n_expected is not None and n != n_expected:
+        raise ValueError(f"its {_META_KEY} says {n} points where {n_expected} are expected (another run's file, "
+                         "or a crafted one); refused unread")
     named = _entry_names(vertex_count, face_count)
     unknown = sorted(k for k in infos if k not in named and not k.startswith(_BYTES_PREFIX))
     if unknown:
         raise ValueError(f"scan arrays: unexpected entries {unknown}")
+    # The attributes, normals and faces within 4 KB a point; the format bytes (a large LAS's
+    # waveform EVLRs) may use what they leave, and _BYTES_BESIDES more.
+    per_point = sum(info.file_size for name, info in infos.items()
+                    if name != _META_KEY and not name.startswith(_BYTES_PREFIX))
+    budget = max(n, 0) * _BYTES_PER_POINT + _PER_POINT_SLACK
+    if per_point > budget:
+        raise ValueError(f"its entries declare {per_point} bytes, more than {n} points' attributes can take "
+                         f"({budget}); refused unread")
     declared = sum(info.file_size for info in infos.values())
     budget = max(n, 0) * _BYTES_PER_POINT + _BYTES_BESIDES
     if declared > budget:
-        raise ValueError(f"its entries declare {declared} bytes, more than {n} points' attributes can take "
-                         f"({budget}); refused unread")
+        raise ValueError(f"its entries declare {declared} bytes, more than {n} points' attributes and their "
+                         f"format's own bytes can take ({budget}); refused unread")
+
+
+def npz_entries(archive) -> dict:
+    """An .npz archive's (a zipfile.ZipFile's) entries by array name (without .npy), with the
+    sizes they declare: what np.load would unpack, known without unpacking it."""
+    return {info.filename[:-4] if info.filename.endswith(".npy") else info.filename: info
+            for info in archive.infolist()}
+
+
+# numpy's own default for the largest .npy header it parses; a saved array's header is ~128 bytes.
+_MAX_NPY_HEADER = 10000
+
+
+def npy_shape(archive, info) -> tuple[tuple, np.dtype]:
+    """(shape, dtype) of one .npz entry, from its .npy header alone: a few hundred bytes are
+    decompressed, whatever size the entry declares. ValueError for a header that is damaged,
+    too long, or not a plain array."""
+    with archive.open(info) as fp:
+        version = np.lib.format.read_magic(fp)
+        if version == (1, 0):
+            shape, _, dtype = np.lib.format.read_array_header_1_0(fp, max_header_size=_MAX_NPY_HEADER)
+        elif version == (2, 0):
+            shape, _, dtype = np.lib.format.read_array_header_2_0(fp, max_header_size=_MAX_NPY_HEADER)
+        else:  # 3.0 is for utf-8 field names, which no plain array needs
+            raise ValueError(f"entry {info.filename!r}: unsupported .npy version {version}")
+    return shape, dtype
+
+
+def require_regular_file(path) -> None:
+    """Refuses a path that is not a regular file before opening it: a named pipe would block the
+    open until someone writes to it, and a device (/dev/zero, /dev/urandom) never ends."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as exc:
+        raise ValueError(f"cannot read it ({exc.strerror or exc})") from None
+    if not stat.S_ISREG(mode):
+        raise ValueError(f"it is not a regular file ({_file_kind(mode)}); refused unread")
+
+
+def _file_kind(mode: int) -> str:
+    kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a named pipe"), (stat.S_ISCHR, "a character device"),
+             (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+    return next((name for test, name in kinds if test(mode)), "not a regular file")
 
 
 def _entry_names(vertex_count: int, face_count: int) -> set:

@@ -7,8 +7,15 @@
       columns are kept as float64 attributes column_3, column_4, ... Columns declared as 64-bit
       integers (id:u8, id:i8) are read and written exactly, not through float64; a header that
       names a column twice is refused. Only float (or undeclared) nx ny nz are normals.
+      Colours: three columns the header names R G B or red green blue (any case), holding whole
+      numbers within 0..255 (or 0..65535), become the attributes red, green, blue as uint8 (or
+      uint16), as the PLY and LAS readers give them, so that every writer writes them as colours
+      (a header's integer dtype, red:u2, is kept). Colours in a file without a header are not
+      guessed: they stay float64 column_3 ... (add the header line to read them as colours).
 .pts  a first line with the point count, then x y z [intensity] [r g b] (Leica/Faro style):
-      4 columns are intensity, 6 are colour, 7 are both. A file of several scans, each block
+      4 columns are intensity, 6 are colour, 7 are both. Colours are written as 0..255: 16-bit
+      ones (above 255, as LAS stores them) are scaled to 8 bits with a warning; intensities are
+      written as they are, with a warning when outside Leica's -2048..2047. A file of several scans, each block
       after its own count line, is read whole with vertex attribute scan_id (uint16), and a scan
       whose scan_id is in increasing order is written that way.
 Coordinates are written with %.17g, which float64 reads back exactly.
@@ -23,7 +30,7 @@ import numpy as np
 
 from .atomic import atomic_write
 from .scan import Scan
-from .text_tables import IntegerOutOfRange, check_integer_range, numbers, open_text, write_rows
+from .text_tables import IntegerOutOfRange, check_integer_range, eight_bit_colours, numbers, open_text, write_rows
 
 _HEADER_MARK = "#"
 _PTS_COLUMNS = {3: (), 4: ("intensity",), 6: ("red", "green", "blue"), 7: ("intensity", "red", "green", "blue")}
@@ -42,7 +49,40 @@ def read_xyz(path) -> Scan:
     exact.update(_undeclared_wide_integers(path, rows, names, declared, skip=int(header is not None)))
     for i, values in exact.items():
         dtypes[i] = values.dtype.str
+    if names_given:
+        _name_colour_columns(names, dtypes, rows, declared)
     return _scan(path, rows, names, dtypes, {"format": "xyz", "header": bool(names_given)}, exact)
+
+
+# The names a header may give colour columns (CloudCompare writes R G B), lower-cased.
+_COLOUR_NAMES = {"r": "red", "red": "red", "g": "green", "green": "green", "b": "blue", "blue": "blue"}
+
+
+def _name_colour_columns(names: list, dtypes: list, rows: np.ndarray, declared: set) -> None:
+    """In place: the three columns a header names R G B or red green blue (any case) become
+    red, green, blue, as uint8 when their whole numbers are within 0..255, else uint16 within
+    0..65535 (a dtype the header declares stays). Without this, "//X Y Z R G B" gave float64
+    attributes R, G, B that no writer knows for colours (LAS wrote a point format without RGB,
+    PLY 'property double R'). Colours that are not whole numbers, or a name given twice, stay
+    as they are."""
+    columns = {}
+    for i, name in enumerate(names[3:], start=3):
+        colour = _COLOUR_NAMES.get(name.lower())
+        if colour is not None:
+            columns.setdefault(colour, []).append(i)
+    if sorted(columns) != ["blue", "green", "red"] or any(len(c) != 1 for c in columns.values()):
+        return
+    order = [columns[c][0] for c in ("red", "green", "blue")]
+    if any(i in declared and np.dtype(dtypes[i]).kind not in "iu" for i in order):
+        return  # declared floats (0..1 colours, or anything else): the header's word
+    values = rows[:, order]
+    if not (np.array_equal(values, np.round(values)) and values.min() >= 0 and values.max() <= 65535):
+        return
+    width = np.dtype(np.uint8 if values.max() <= 255 else np.uint16).str
+    for i, colour in zip(order, ("red", "green", "blue")):
+        names[i] = colour
+        if i not in declared:
+            dtypes[i] = width
 
 
 def _declared_columns(header: str, ncols: int) -> set:
@@ -148,12 +188,17 @@ def write_pts(path, scan: Scan) -> None:
     columns = [scan.points[:, i] for i in range(3)]
     formats = ["%.17g"] * 3
     if "intensity" in scan.vertex_attributes:
-        columns.append(scan.vertex_attributes["intensity"])
-        formats.append(_format(scan.vertex_attributes["intensity"]))
+        intensity = scan.vertex_attributes["intensity"]
+        _warn_if_outside_pts_intensity(path, intensity)
+        columns.append(intensity)
+        formats.append(_format(intensity))
     if all(c in scan.vertex_attributes for c in ("red", "green", "blue")):
+        colours, loss = eight_bit_colours({c: scan.vertex_attributes[c] for c in ("red", "green", "blue")}, path)
+        if loss:
+            warnings.warn(f"{path}: .pts holds 8-bit colours: {loss}", stacklevel=3)
         for c in ("red", "green", "blue"):
-            columns.append(scan.vertex_attributes[c])
-            formats.append(_format(scan.vertex_attributes[c]))
+            columns.append(colours[c])
+            formats.append("%d")
     kept = {"intensity", "red", "green", "blue"}
     ids = scan.vertex_attributes.get("scan_id")
     counts = [scan.n_points]
@@ -165,6 +210,21 @@ def write_pts(path, scan: Scan) -> None:
     if dropped:
         warnings.warn(f"{path}: .pts has no room for {', '.join(dropped)}; not written", stacklevel=3)
     _write(path, _rows(columns), formats, header=None, count=counts)
+
+
+# Leica's PTS intensity range, which Cyclone and ReCap expect; other readers take any number.
+_PTS_INTENSITY = (-2048, 2047)
+
+
+def _warn_if_outside_pts_intensity(path: str, intensity) -> None:
+    """Intensities are written as they are (a LAS file's 0..65535 too): scaling them would change
+    the user's numbers for every reader, and most readers (CloudCompare, ours) take any. Says so
+    when they lie outside Leica's -2048..2047, which some readers clip."""
+    values = np.asarray(intensity)
+    if values.size and (values.min() < _PTS_INTENSITY[0] or values.max() > _PTS_INTENSITY[1]):
+        warnings.warn(f"{path}: intensity {values.min():.17g}..{values.max():.17g} written as it is, outside "
+                      f"Leica's PTS range {_PTS_INTENSITY[0]}..{_PTS_INTENSITY[1]} that some readers (Cyclone, "
+                      "ReCap) expect", stacklevel=4)
 
 
 # -- helpers ----------------------------------------------------------------------------------

@@ -98,3 +98,33 @@ def check_integer_range(values: np.ndarray, dtype: np.dtype, what: str) -> None:
     if values.size and (values.min() < info.min or values.max() > info.max):
         raise IntegerOutOfRange(f"{what} is declared {dtype} but holds {values.min():.17g}..{values.max():.17g}, "
                          f"outside {info.min}..{info.max}")
+
+
+def eight_bit_colours(channels: dict, where: str) -> tuple[dict, str | None]:
+    """(name -> uint8 values, a note of what was lost or None) for a format that stores colours
+    as 0..255 (PTS, and E57 as pye57 writes it). The channels are judged together, so that they
+    stay one colour:
+      floats all within 0..1   255 * v, rounded; the note says so when that changes them;
+      all within 0..255        8-bit values, whatever their field's width (many photogrammetry
+                               exporters put 8-bit colours in LAS's 16-bit fields): kept
+                               exactly (fractions rounded, and the note says so);
+      within 0..65535          16-bit colours: 255 * v / 65535, rounded; the note says so.
+    Anything else (negative, beyond 16 bits, NaN) is a ValueError naming `where` and the channels."""
+    values = {name: np.asarray(v) for name, v in channels.items()}
+    names = ", ".join(values)
+    stacked = np.concatenate([v.ravel() for v in values.values()]).astype(np.float64)
+    top = float(stacked.max(initial=0))
+    if stacked.size and (not np.isfinite(stacked).all() or stacked.min() < 0 or top > 65535):
+        raise ValueError(f"{where}: colours {names} hold values outside 0..65535 (or not finite); a colour is 0..1, "
+                         "0..255 (8-bit) or 0..65535 (16-bit)")
+    if any(v.dtype.kind == "f" for v in values.values()) and top <= 1:
+        scale, what = 255.0, f"colours {names} of 0..1 written as 255 * value, rounded"
+    elif top <= 255:
+        scale, what = 1.0, f"colours {names} with fractions written rounded to whole numbers"
+    else:
+        scale, what = 255 / 65535, (f"16-bit colours {names} written as 8-bit (255 * value / 65535, rounded): their "
+                                    "low 8 bits are lost; .ply or .las keep them")
+    scaled = {name: np.round(v.astype(np.float64) * scale).astype(np.uint8) for name, v in values.items()}
+    exact = scale == 1.0 and np.array_equal(stacked, np.round(stacked)) or \
+        scale == 255.0 and np.array_equal(stacked * 255, np.round(stacked * 255))
+    return scaled, None if exact else what
