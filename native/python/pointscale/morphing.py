@@ -74,6 +74,8 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_sam
                         morphed into part i of B alone (parts numbered by their lowest vertex, so
                         two versions of one mesh match), and B's offsets never cross from one
                         part to another (pointscale.parts_onto_base).
+    Where evaluate(0, 1) misses B (over B_MISS_SHARE of A's samples land farther from B than 1%
+    of B's diagonal), a warning says so.
     """
     from .alignment import METHODS, overlap, similarity
     if align not in METHODS:
@@ -114,9 +116,45 @@ def morph(points_a, points_b, base_points=None, *, align: str = "none", base_sam
             result = Morph(*morph_by_part(labels_a, labels_b, count, morph_one, as_callback(progress)))
     if result is None:
         result = _morph_where_they_lie(a, b, base_points, progress=progress, **options)
+    message = _b_missed_warning(result, b, threads)
+    if message:
+        warnings.warn(message, stacklevel=2)
     result.report["overlap"] = share
     result.placement = placement
     return result
+
+
+#: The share of A's samples that may land off B at evaluate(0, 1) before morph warns: a scan's
+#: stray or duplicated samples, and B's sheets that A's samples do not reach, land off it too.
+B_MISS_SHARE = 0.01
+
+
+def _b_missed_warning(result: Morph, b: np.ndarray, threads: int) -> str | None:
+    """The warning for a morph whose evaluate(0, 1) misses B, or None. Measured on the morph
+    itself, in B's frame (with alignment, the aligned B): how far each of A's samples at (0, 1)
+    lies off the plane of B at its nearest point of B (16 neighbours), as a share of B's
+    diagonal. The distance to that point itself would count B's sampling: a coarse mesh's
+    vertices lie farther apart than the miss.
+
+    Where B has points with no position on the base whose normal passes through them (B reaches
+    beyond the base's centres of curvature, or its projections crowd into strips, as a box's
+    edges do over an ellipsoid), their offsets leave gaps on the base that A's samples fill by
+    interpolation, off B: a box morphed from an ellipsoid missed B by 3.4% of its diagonal at
+    13% of the samples, and bases that fit B missed it by no more than its sampling.
+    """
+    from .alignment import nearest_indices
+    landed = result.base + result.detail_b[:, None] * result.normals
+    nearest = nearest_indices(b, landed, threads)
+    normals = _core.estimate_normals(b - centre(b), min(16, len(b)), False, threads)
+    diagonal = float(np.linalg.norm(b.max(axis=0) - b.min(axis=0)))
+    miss = np.abs(np.einsum("ij,ij->i", landed - b[nearest], normals[nearest]))
+    off = miss > 0.01 * diagonal
+    if not off.mean() > B_MISS_SHARE:
+        return None
+    return (f"morph: evaluate(0, 1) misses B (points_b) by more than 1% of its diagonal at {int(off.sum())} of "
+            f"A's {len(landed)} samples (up to {miss.max() / diagonal:.2g} of it). B reaches beyond the base's "
+            "centres of curvature or lies far from it, so some of B has no place on the base: a base nearer B, "
+            "curving no more tightly than it, lets the morph reach B")
 
 
 def _morph_where_they_lie(a, b, base_points, *, base_normals, kernel, neighbors, interpolation_neighbors,

@@ -485,7 +485,9 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
                 dec.parts lists the parts. A vertex in no face or edge joins its nearest part.
     sheets      keep two-sided thin sheets apart (a leaf, sheet metal, a wall scanned from both
                 sides, thinner than the kernel): the sides are told apart by the normals, which
-                must then face outward (given, or estimated and oriented when None). A point's
+                must then face outward: given; when None, those of the faces' winding when faces
+                are given and wound consistently (sheets.winding_normals; a warning says when they
+                are not), else estimated and oriented. A point's
                 fits, clusters and level normals then take only points whose normals turn less
                 than 120 degrees from its own, so a surface that turns further within a kernel
                 (a wire, a sharp rim) is not smoothed across either. Off by default: it costs
@@ -499,6 +501,8 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
     else raises ValueError, as does a diffusion that would not give the input back.
     """
     sheets = flag(sheets, "sheets")
+    if sheets and normals is None and faces is not None:
+        normals = _normals_from_winding(points, faces)  # a mesh without normals still faces a way
     if mirror is not None:
         arguments = dict(locals())  # every argument, so options added later pass through too
         from .mirror import decompose_mirrored
@@ -521,7 +525,11 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
                            max_iterations=max_iterations, max_variation=max_variation, smoother=smoother,
                            encoding=encoding, diffusion_iterations=diffusion_iterations, lam=lam, taubin=taubin,
                            diffusion_neighbors=diffusion_neighbors, threads=threads, sheets=sheets)
-            return _decompose_by_part(p, labels, count, levels, normals, options, as_callback(progress))
+            dec = _decompose_by_part(p, labels, count, levels, normals, options, as_callback(progress))
+            message = _rays_missed_warning(dec.settings.get("rays_missed", []))  # the parts' are not shown
+            if message:
+                warnings.warn(message, stacklevel=2)
+            return dec
     if encoding == "rayshoot":
         return decompose_rayshoot(
             points, levels, smoother=smoother, decimation=decimation, kernel=kernel, normals=normals,
@@ -562,6 +570,19 @@ def decompose(points, levels: int = 4, *, decimation: float = 0.25, kernel: floa
         _require_round_trip(dec, p, f"diffusion_iterations={diffusion.iterations} smoothed the support too far; "
                                     "use fewer iterations")
     return dec
+
+
+def _normals_from_winding(points, faces):
+    """sheets=True on a mesh given without normals: outward normals from its faces' winding
+    (sheets.winding_normals), or None, with a warning that says why, to estimate them."""
+    from .parts import connectivity_pairs
+    from .sheets import winding_normals
+    p = as_points(points)
+    connectivity_pairs(len(p), faces)  # the faces' shape and indices, refused as decompose refuses them
+    normals, why_not = winding_normals(p, faces)
+    if why_not:
+        warnings.warn(why_not, stacklevel=3)
+    return normals
 
 
 # Set while a part is decomposed alone: the sides were checked on the whole model, and a part's
@@ -823,7 +844,23 @@ def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decima
                     rays_missed=[int(len(m)) for m in missed])
     dec = Decomposition(model, origin, settings, _missed_rays=[np.asarray(m) for m in missed])
     _require_finite_model(dec)
+    # The same coarse-base warning as the projection encoding: the scale space is built alike.
+    for message in (coarse_base_warning(len(p), options.levels, options.decimation),
+                    _rays_missed_warning(settings["rays_missed"])):
+        if message:
+            warnings.warn(message, stacklevel=2)
     return dec
+
+
+def _rays_missed_warning(missed: list) -> str | None:
+    """The warning for rays that found no surface, or None: their points sit off the surface,
+    which the counts in settings alone do not tell anyone."""
+    total = int(sum(missed))
+    if not total:
+        return None
+    return (f"ray shooting: {total} rays found no surface (per band, coarsest first: "
+            f"{', '.join(str(int(m)) for m in missed)}); those points stay at their origin's orthogonal projection, "
+            "so the finer levels may leave the surface there (settings['rays_missed'], rays_missed_points(dec))")
 
 
 def rays_missed_points(dec: Decomposition) -> list:

@@ -74,4 +74,77 @@ def estimated_sides_warning(points: np.ndarray, threads: int = 0) -> str | None:
             f"{same} face the same way as it and {away} face away. Either there is no wall thinner than the kernel (sheets=True "
             "then changes nothing), or the estimate oriented both sides of such walls alike, as it does for walls "
             "thinner than about two point spacings and the inside of closed hollow shapes: they blend as without "
-            "sheets. To keep them apart, give outward normals (normals=..., e.g. a mesh's vertex normals)")
+            "sheets. To keep them apart, give outward normals (normals=..., e.g. a mesh's vertex normals) or the "
+            "mesh's consistently wound faces (faces=...)")
+
+
+def winding_normals(points: np.ndarray, faces) -> tuple[np.ndarray | None, str | None]:
+    """Outward vertex normals from a mesh's faces, for sheets=True when no normals are given:
+    (normals, None), or (None, why not) when the faces cannot give them.
+
+    A mesh file without normals (an STL, a PLY or OBJ with faces only) still says which way
+    each face looks, by the order of its corners; each vertex takes the area-weighted normals of
+    its faces, summed (each polygon as the triangles of a fan from its first corner, as
+    meshes.vertex_normals does). That only tells the sides of a wall apart when neighbouring
+    faces agree: where two faces wind their shared edge the same way, one of them is flipped,
+    and normals taken from them would face either way. So the normals are refused as a whole
+    when any shared edge is wound alike by two faces, or any vertex's normal is zero (a vertex
+    in no face, or faces that cancel there).
+    points (n, 3); faces (m, k) or a list of polygons, indices already checked against n.
+    """
+    polygons = _polygons_by_corner_count(faces)
+    n = len(points)
+    summed = np.zeros((n, 3), dtype=np.float64)
+    directed = []
+    for corners in polygons:
+        for triangle in _fan_triangles(corners):
+            a, b, c = (points[triangle[:, i]] for i in range(3))
+            normal = np.cross(b - a, c - a)  # twice the triangle's area, along its normal
+            for i in range(3):
+                for axis in range(3):  # bincount sums repeated indices, as np.add.at does, far faster
+                    summed[:, axis] += np.bincount(triangle[:, i], weights=normal[:, axis], minlength=n)
+        directed.append(np.stack([corners.ravel(), np.roll(corners, -1, axis=1).ravel()], axis=1))
+    if not directed:
+        return None, None  # no faces: nothing to take the normals from
+    alike = _edges_wound_alike(np.concatenate(directed), n)
+    if alike.size:
+        return None, (f"sheets=True: the faces wind {len(alike)} shared edges "
+                      f"the same way on both sides (the first joins vertices {alike[0, 0]} and {alike[0, 1]}), so "
+                      "their winding does not say which way the surface faces; the normals are estimated from "
+                      "the points instead. Recalculate the mesh's normals outside (Blender: Mesh > Normals > "
+                      "Recalculate Outside) or give outward normals")
+    length = np.sqrt(np.einsum("ij,ij->i", summed, summed))
+    zero = np.flatnonzero(~(length > 0.0))
+    if zero.size:
+        return None, (f"sheets=True: {zero.size} vertices have no normal from the faces (the first is vertex "
+                      f"{zero[0]}: in no face, or between faces that cancel), so the normals are estimated from "
+                      "the points instead. Give outward normals, or a mesh whose every vertex is in a face")
+    return summed / length[:, None], None
+
+
+def _polygons_by_corner_count(faces) -> list:
+    """faces as a list of (m, k) int64 arrays, one per corner count k >= 3 (fewer corners make
+    no area)."""
+    if isinstance(faces, np.ndarray) and faces.dtype != object:
+        grouped = [np.asarray(faces, dtype=np.int64).reshape(len(faces), -1)] if len(faces) else []
+    else:
+        polygons = [np.asarray(face, dtype=np.int64).reshape(-1) for face in faces]
+        sizes = np.array([len(p) for p in polygons], dtype=np.int64)
+        grouped = [np.stack([p for p, s in zip(polygons, sizes) if s == k]) for k in np.unique(sizes)]
+    return [g for g in grouped if g.shape[1] >= 3]
+
+
+def _fan_triangles(corners: np.ndarray) -> list:
+    """(m, k) polygons as k - 2 (m, 3) triangle arrays, fanned from each polygon's first corner:
+    for quads, the triangles meshes.quads_to_triangles makes."""
+    return [corners[:, [0, c, c + 1]] for c in range(1, corners.shape[1] - 1)]
+
+
+def _edges_wound_alike(directed: np.ndarray, n: int) -> np.ndarray:
+    """(e, 2) the edges that two faces run through in the same direction, once each: in a
+    consistently wound mesh each face runs a shared edge the other way."""
+    directed = directed[directed[:, 0] != directed[:, 1]]  # a repeated corner makes no edge
+    keys = directed[:, 0] * np.int64(n) + directed[:, 1]
+    unique, counts = np.unique(keys, return_counts=True)
+    twice = unique[counts > 1]
+    return np.stack([twice // n, twice % n], axis=1)

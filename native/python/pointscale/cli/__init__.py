@@ -26,8 +26,11 @@ _warned = set()
 _CLI_WORDS = (("sheets=True", "--sheets"), ("smoother='diffusion'", "--smoother diffusion"),
               ("encoding='rayshoot'", "--encoding rayshoot"), ("smoother='mls'", "--smoother mls"),
               ("encoding='projection'", "--encoding projection"),
-              ("give outward normals (normals=..., e.g. a mesh's vertex normals)",
-               "give the file outward normals (nx, ny, nz; e.g. a mesh's vertex normals)"))
+              # An STL holds no normals, but its faces' winding tells the sides apart as well.
+              ("give outward normals (normals=..., e.g. a mesh's vertex normals) or the mesh's consistently wound "
+               "faces (faces=...)",
+               "give a file with outward normals (nx, ny, nz) or with consistently wound faces (an STL; a PLY, OBJ "
+               "or OFF with faces)"))
 
 
 def _in_cli_words(text: str) -> str:

@@ -32,6 +32,19 @@ def normals_to_use(scan, args):
     return scan.normals
 
 
+def normals_for_sheets(scan, args, used_normals):
+    """The normals decompose takes: with --sheets on a mesh file without them, and --parts none
+    (which passes no faces), those of the faces' winding, as decompose takes them from the faces
+    it is given (sheets.winding_normals); a warning says when the faces cannot give them."""
+    if not args.sheets or used_normals is not None or not scan.n_faces or args.parts != "none":
+        return used_normals
+    from ..sheets import winding_normals
+    normals, why_not = winding_normals(scan.points, scan.faces)
+    if why_not:
+        warnings.warn(why_not, stacklevel=2)
+    return normals
+
+
 def parse_gains(text: str, bands: int) -> np.ndarray:
     try:
         gains = np.array([float(g) for g in text.split(",")])
@@ -151,7 +164,8 @@ def cmd_decompose(args) -> None:
         used_normals = normals_to_use(scan, args)
         try:
             dec = decompose(scan.points, levels=args.levels, decimation=args.decimation, kernel=args.kernel,
-                            neighbors=args.neighbors, normals=used_normals, smoother=args.smoother,
+                            neighbors=args.neighbors, normals=normals_for_sheets(scan, args, used_normals),
+                            smoother=args.smoother,
                             encoding=args.encoding, threads=args.threads, progress=progress.stage("decomposing"),
                             faces=scan.faces if args.parts == "faces" and scan.n_faces else None,
                             sheets=args.sheets, mirror=mirror_option(args))

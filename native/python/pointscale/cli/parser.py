@@ -103,8 +103,9 @@ def build_parser(formats: str) -> argparse.ArgumentParser:
                         "neither blend nor move together; none: every point is one surface")
     d.add_argument("--sheets", action="store_true",
                    help="keep two-sided thin sheets apart (leaves, sheet metal, walls scanned from both sides): the "
-                        "sides are told apart by the file's normals, which must face outward, or by normals "
-                        "estimated and oriented when it has none; costs time (README, Thin sheets)")
+                        "sides are told apart by the file's normals, which must face outward; without them by "
+                        "its faces' winding (an STL), or by normals estimated and oriented for a point cloud; "
+                        "costs time (README, Thin sheets)")
     d.add_argument("--mirror", metavar="AXES",
                    help="the input is one half of a mirror-symmetric model, e.g. x (the plane x = 0), xy or xyz: "
                         "the half and its reflections are decomposed as one, so the result is exactly symmetric "
