@@ -158,6 +158,18 @@ def finest_residual(solver, dec, read_basis) -> np.ndarray | None:
     return residual
 
 
+#: The engine's words in its morph warnings, and the panel's for them.
+_MORPH_WORDS = (("morph: ", ""), ("B (points_b)", "B"),
+                ("evaluate(0, 1)", "'B detail' at 1"))
+
+
+def _morph_words(message: str) -> str:
+    """An engine warning of the morph as the panel says it (the operator adds 'Morph: ')."""
+    for python, panel in _MORPH_WORDS:
+        message = message.replace(python, panel)
+    return message
+
+
 def morph_keys(ps, a: np.ndarray, b: np.ndarray, base_points: np.ndarray | None = None, samples: int = 40000,
                align: str = "NONE"):
     """Eq. 22 as three arrays and the engine's warnings: (projected A, A + alpha detail at (1,0),
@@ -177,7 +189,8 @@ def morph_keys(ps, a: np.ndarray, b: np.ndarray, base_points: np.ndarray | None 
         warnings.simplefilter("always")
         m = ps.morph(a, b, base_points, align=align.lower(), base_samples=samples)
     # The engine's overlap warning speaks Python: say it in the panel's words.
-    messages = tuple(str(w.message) for w in caught if not str(w.message).startswith("A and B barely overlap"))
+    messages = tuple(_morph_words(str(w.message)) for w in caught
+                     if not str(w.message).startswith("A and B barely overlap"))
     if m.report["overlap"] < ps.morphing.OVERLAP_WARNING:
         messages += (f"A and B barely overlap (their bounding boxes share {m.report['overlap']:.0%}), so the morph "
                      "will not reach B: set Align in the Morph panel (Bounding Box, Principal Axes or Closest "

@@ -5,6 +5,8 @@ Vertex groups have no foreach_get: mesh_io.read_group_weights walks the vertices
 point attribute ("Named Attribute" reads a vertex group exactly, as float32), on a temporary
 object that shares the mesh (vertex groups live on the mesh) and has no other modifier, so its
 evaluated vertices are the mesh's own, whatever modifiers the artist's object has. 0.15 s at 1M.
+A group named like another attribute (a UV map, 'position') is read vertex by vertex instead:
+Blender 4.5's Named Attribute reads the attribute there, not the group.
 """
 
 from __future__ import annotations
@@ -25,11 +27,30 @@ def read(obj, group_names, n: int) -> list:
     wanted = [name for name in names if name is not None]
     if not wanted:
         return [None] * len(names)
+    taken = _names_taken(obj.data)
+    shared = [name for name in wanted if name in taken]
+    read_by_name = dict(zip(shared, mesh_io.read_group_weights(obj, shared, n)))
     try:
-        read_by_name = _evaluated_weights(obj, wanted, n)
+        read_by_name.update(_evaluated_weights(obj, [name for name in wanted if name not in taken], n))
     except (RuntimeError, KeyError, ValueError, TypeError, AttributeError):
         return mesh_io.read_group_weights(obj, group_names, n)
     return [None if name is None else read_by_name[name] for name in names]
+
+
+#: Attributes every mesh has in Geometry Nodes, whether or not the mesh lists them.
+_BUILTIN_NAMES = frozenset(("position", "id", "material_index", "sharp_face", "sharp_edge", "normal",
+                            ".edge_verts", ".corner_vert", ".corner_edge"))
+
+
+def _names_taken(mesh) -> set:
+    """Names that Named Attribute may read as something other than a vertex group of that name:
+    the mesh's attributes (on Blender 4.5 a group named like a UV map or 'position' reads as it),
+    its UV maps and colour attributes, and the built-in ones. Groups of these names are read
+    vertex by vertex instead (mesh_io.read_group_weights), which is exact whatever they are named."""
+    taken = set(_BUILTIN_NAMES)
+    for collection in (mesh.attributes, mesh.uv_layers, getattr(mesh, "color_attributes", ())):
+        taken.update(item.name for item in collection)
+    return taken
 
 
 def _tree(names):
@@ -53,6 +74,8 @@ def _tree(names):
 
 
 def _evaluated_weights(obj, names, n: int) -> dict:
+    if not names:
+        return {}
     scene = bpy.context.scene
     tree = _tree(names)
     probe = bpy.data.objects.new(".pointscale weights", obj.data)

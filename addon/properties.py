@@ -148,7 +148,9 @@ class MULTISCALE_PG_settings(bpy.types.PropertyGroup):
     prevent_folds: BoolProperty(
         name="Prevent Folds",
         description="Limit the gain locally, and smoothly, wherever the rebuilt or baked surface would fold over "
-        "itself (only points near a fold change)",
+        "itself. Points within a few rings of a fold move toward the base; where a fold persists the limit "
+        "widens round by round, so it can reach well beyond the points that fold at first. Points out of its "
+        "reach stay exactly as they were",
         default=False,
     )
     show_folds: BoolProperty(

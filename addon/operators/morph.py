@@ -40,6 +40,17 @@ def morph_problem(context):
     return None
 
 
+def own_shape_keys(mesh) -> list:
+    """The names of the artist's shape keys on A's mesh, which the morph object leaves out: every
+    key but the Basis and those the add-on made (its decomposition's)."""
+    kbs = keys.key_blocks(mesh)
+    if kbs is None:
+        return []
+    mine = keys.owned(mesh, mesh.multiscale.n_bands)
+    reference = mesh.shape_keys.reference_key
+    return [kb.name for kb in kbs if kb != reference and kb.name not in mine]
+
+
 def _new_morph_object(context, a_obj, b_obj, p0, pa, pb):
     """The morph object: a copy of A (its modifiers, constraints, materials and parent, as
     Duplicate gives) on a copy of A's mesh at p0 with the keys 'A detail' and 'B detail', linked
@@ -160,6 +171,11 @@ class POINTSCALE_OT_morph(bpy.types.Operator):
             return {"CANCELLED"}
         for message in messages:
             self.report({"WARNING"}, f"Morph: {message}")
+        dropped = own_shape_keys(a_obj.data)
+        if dropped:
+            self.report({"WARNING"}, f"Morph: A's own shape keys are not carried to '{obj.name}': "
+                                     f"{', '.join(repr(name) for name in dropped)} (the morph is made from A's Basis "
+                                     f"and has the keys 'A detail' and 'B detail' only; '{a_obj.name}' keeps them)")
         self.report({"INFO"}, f"Morph '{obj.name}': set 'A detail' (alpha) and 'B detail' (beta) to blend")
         return {"FINISHED"}
 
