@@ -165,6 +165,21 @@ class Symmetry:
             out[into_seam, axis] = side * keep_off
         return out + self._origin
 
+    def crossings(self, half: np.ndarray) -> list:
+        """Where an edited half (n, 3) reaches across a mirror plane: per plane, (axis name,
+        points beyond the seam on the other side, how far the farthest lies beyond the plane,
+        the points off the plane). The whole model is the half and its reflections, so a half
+        moved across its plane overlaps its own mirror image, and symmetric() holds the result
+        at the plane there."""
+        out = []
+        for p, axis in enumerate(self.mirror.axis_indices):
+            off = ~self.on_plane[:, p]
+            depth = -self.sides[p] * (half[:, axis] - self._origin[axis])
+            across = off & (depth > self.mirror.seam)
+            if across.any():
+                out.append((self.mirror.axes[p], int(across.sum()), float(depth[across].max()), int(off.sum())))
+        return out
+
     def symmetric_normals(self, normals: np.ndarray) -> np.ndarray:
         """(N, 3) unit normals -> (n, 3), averaged over each orbit and normalised again."""
         mean = self._average(normals, True)

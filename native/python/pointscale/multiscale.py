@@ -706,7 +706,25 @@ def _base_array(dec: Decomposition, base):
     if b.shape[0] != dec.n_points:  # the half's, which only this package knows
         raise ValueError(f"base must have the decomposition's {dec.n_points} points, got {b.shape[0]}")
     require_near(b, dec.origin, "base", "the decomposition")
+    _check_mirror_crossings(dec._mirror, b)
     return (dec._model.base + dec.origin) + dec._mirror.full_vectors(b - dec.base)
+
+
+def _check_mirror_crossings(symmetry, b: np.ndarray) -> None:
+    """An edited half of a mirrored model that reaches across its plane: the result is held at
+    the plane there, as Blender's Mirror modifier with Clipping holds vertices, so a few points
+    pushed over by a brush are said in a warning; a half moved or flipped across the plane as a
+    whole would come back flattened onto it, and is refused."""
+    for name, count, depth, off in symmetry.crossings(b):
+        plane = f"the {name} mirror plane"
+        if count > off // 2:
+            raise ValueError(f"base: {count} of the half's {off} points off {plane} lie across it (up to {depth:.3g} "
+                             "beyond): a mirrored model is one half and its reflection, so a half moved or flipped "
+                             "across its plane overlaps its own mirror image. Keep the half on its side (flip the "
+                             "whole model, or decompose the flipped half again)")
+        warnings.warn(f"reconstruct: {count} points of the edited base lie across {plane} (up to {depth:.3g} "
+                      "beyond); a mirrored model's half stays on its side, so their results are held at the "
+                      "plane, as the Mirror modifier's Clipping holds vertices", stacklevel=4)
 
 
 def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None, folds: str = "ignore",
