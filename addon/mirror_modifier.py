@@ -60,7 +60,7 @@ def combined(planes: list) -> tuple[MirrorPlanes | None, str | None]:
 
 
 def mirror_planes(use_axis, use_merge: bool, use_clip: bool, merge_threshold: float, diagonal: float,
-                  to_mirror_space=None) -> tuple[MirrorPlanes | None, str | None]:
+                  to_mirror_space=None, bisect_threshold: float = 0.0) -> tuple[MirrorPlanes | None, str | None]:
     """(planes, None), or (None, why the modifier cannot be honoured), or (None, None) for a
     modifier that mirrors nothing.
 
@@ -68,6 +68,9 @@ def mirror_planes(use_axis, use_merge: bool, use_clip: bool, merge_threshold: fl
     merge_threshold  with merge, Blender joins a vertex with its reflection when they are closer
                      than this, that is when the vertex is within half of it of the plane: those
                      are the seam. With clipping alone, the vertices within it are held on the plane.
+    bisect_threshold with Bisect on a mirrored axis, Blender also joins a vertex within this of the
+                     plane with its reflection: the seam is at least that wide, or a vertex kept just
+                     beyond a narrower seam at some level would be merged there (0: no bisect).
     to_mirror_space  4x4, the mesh's coordinates -> the mirror object's (None: no mirror object).
                      Its planes must be axis-aligned in the mesh's space; any translation, scale
                      along the axes, or quarter turn is, a general rotation is not.
@@ -81,6 +84,7 @@ def mirror_planes(use_axis, use_merge: bool, use_clip: bool, merge_threshold: fl
         seam = float(merge_threshold)
     else:
         seam = SMALL_SEAM * float(diagonal)
+    seam = max(seam, float(bisect_threshold))
     origin = np.zeros(3)
     mesh_axes = axes
     if to_mirror_space is not None:

@@ -38,9 +38,10 @@ def _mirror_planes(obj, points):
         if modifier.mirror_object is not None:
             # Blender mirrors in the mirror object's space: the mesh's coordinates -> world -> its.
             to_mirror_space = np.array(modifier.mirror_object.matrix_world.inverted() @ obj.matrix_world)
+        bisects = any(b and a for b, a in zip(modifier.use_bisect_axis, modifier.use_axis))
         planes, problem = mirror_modifier.mirror_planes(
             tuple(modifier.use_axis), modifier.use_mirror_merge, modifier.use_clip, modifier.merge_threshold,
-            diagonal, to_mirror_space)
+            diagonal, to_mirror_space, modifier.bisect_threshold if bisects else 0.0)
         if problem:
             raise ValueError(f"{problem} (modifier '{modifier.name}')")
         found.append(planes)
