@@ -45,6 +45,18 @@ def normals_for_sheets(scan, args, used_normals):
     return normals
 
 
+def input_where_rebuilt(finest: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The finest level as written: the input's own coordinates, bit for bit, wherever the model
+    rebuilds them to rounding (a few units in the last place: a technician who compares the file
+    with the scan finds no point changed), the model's elsewhere (a mirrored half's seam snapped
+    onto its plane, ray shooting's resampled surface)."""
+    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    same = np.abs(finest - points).max(axis=1) <= 1e-9 * diagonal
+    out = finest.copy()
+    out[same] = points[same]
+    return out
+
+
 def parse_gains(text: str, bands: int) -> np.ndarray:
     try:
         gains = np.array([float(g) for g in text.split(",")])
@@ -181,6 +193,7 @@ def cmd_decompose(args) -> None:
         progress.stage("levels")
         k = dec.n_bands
         levels = [dec.level(l) for l in range(k + 1)]
+        levels[k] = input_where_rebuilt(levels[k], scan.points)
         normals = [dec.normals(l) for l in range(k)]
 
         staged.make_dir(out)
