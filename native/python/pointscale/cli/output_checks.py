@@ -124,10 +124,11 @@ def _few_vertices(scan, points: np.ndarray, count: int = 8):
                    faces=faces, face_attributes=face_attributes, format_info=scan.format_info)
 
 
-def read_base(path: str, n_points: int, source):
+def read_base(path: str, n_points: int, source, stored=None):
     """The edited level 0 of `path`, (n, 3), checked against the decomposition: the same vertex
     count and, when both files have faces, the same faces (STL, say, renumbers its vertices on
-    reading, which would pair each vertex with another's detail)."""
+    reading, which would pair each vertex with another's detail). stored: the decomposition's
+    own level 0, against which a base in another vertex order is told (a warning)."""
     base = io.read(path)
     if base.n_points != n_points:
         raise ValueError(f"--base {path} has {base.n_points} points; the decomposition has {n_points} "
@@ -136,7 +137,35 @@ def read_base(path: str, n_points: int, source):
         raise ValueError(f"--base {path} has other faces than the decomposed input: its vertices are "
                          "not in the input's order (edit a level file in a format that keeps vertex order, "
                          "such as PLY)")
+    if stored is not None:
+        _warn_if_reordered(path, base.points, stored)
     return base.points
+
+
+#: The median stretch of the edges between nearest neighbours beyond which a base is taken for
+#: one in another vertex order: an edit that stretches the surface itself 20 times is no edit.
+REORDERED_STRETCH = 20.0
+
+
+def _warn_if_reordered(path: str, base: np.ndarray, stored: np.ndarray) -> None:
+    """A base in another vertex order (a point cloud re-saved sorted, or shuffled) has its count,
+    yet pairs each point with another's detail: the result is garbage. Its points lie far from
+    the points that neighbour them in the decomposition's level 0, which no edit does."""
+    from .. import _core
+    if len(stored) < 2:
+        return
+    rows = _core.knn_within_parts(stored, np.zeros(len(stored), dtype=np.int32), k=2, threads=0).astype(np.int64)
+    before = np.linalg.norm(stored[rows[:, 1]] - stored, axis=1)
+    after = np.linalg.norm(base[rows[:, 1]] - base, axis=1)
+    use = before > 0.0
+    if not use.any():
+        return
+    stretch = float(np.median(after[use] / before[use]))
+    if stretch > REORDERED_STRETCH:
+        warnings.warn(f"--base {path}: points that neighbour each other in the decomposition's level 0 lie a median "
+                      f"{stretch:.0f} times farther apart in it; it looks like level 0 in another vertex order, which "
+                      "pairs each vertex with another's detail (edit level_0 in a format and tool that keep the "
+                      "vertex order, such as PLY)")
 
 
 def _same_faces(a, b) -> bool:
