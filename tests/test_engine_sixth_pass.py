@@ -209,3 +209,31 @@ def test_rayshoot_warns_with_the_count_of_rays_that_missed():
     dec, said = _caught(lambda: ps.decompose_rayshoot(ps.shapes.bumpy_sphere(12000), 3, threads=2))
     assert sum(dec.settings["rays_missed"]) == 0
     assert not any("rays found no surface" in s for s in said), said
+
+
+def test_a_closed_mesh_wound_inside_out_is_taken_turned_outward():
+    """Consistent winding says which way faces look, not that they look out: a closed mesh wound
+    inside out passed the winding check, and sheets=True then turned every level's normals in
+    (a reviewer's bumpy icosphere: 100% facing in, its bump read as a dent, no word). A closed
+    part enclosing a negative volume is now turned outward, with a warning; an open sheet keeps
+    the winding it was given."""
+    v, f = ps.meshes.uv_sphere(1.0, 64, 32)
+    v = ps.meshes.bumpy(v, 0.04, 4.0)
+    outward = v / np.linalg.norm(v, axis=1, keepdims=True)
+    reversed_faces = np.asarray(f)[:, ::-1]
+    normals, why_not = winding_normals(v, reversed_faces)
+    assert why_not is None
+    assert np.mean(np.einsum("ij,ij->i", normals, outward) > 0) > 0.99
+    dec, said = _caught(lambda: ps.decompose(v, 3, faces=reversed_faces, sheets=True, threads=2))
+    assert any("wound inside out" in s for s in said), said
+    assert np.mean(np.einsum("ij,ij->i", dec.normals(1), outward) < 0) < 0.01
+    # An open cap of the same sphere, wound inside out: kept as given (which side is out is the mesh's call).
+    cap = v[:, 2] > 0.3
+    keep = cap[np.asarray(f)].all(axis=1)
+    renumber = np.cumsum(cap) - 1
+    cap_faces = renumber[np.asarray(f)[keep]][:, ::-1]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        cap_normals, _ = winding_normals(v[cap], cap_faces)
+    assert not any("inside out" in str(w.message) for w in caught)
+    assert np.mean(np.einsum("ij,ij->i", cap_normals, outward[cap]) < 0) > 0.99

@@ -95,9 +95,10 @@ def winding_normals(points: np.ndarray, faces) -> tuple[np.ndarray | None, str |
     polygons = _polygons_by_corner_count(faces)
     n = len(points)
     summed = np.zeros((n, 3), dtype=np.float64)
-    directed = []
+    directed, triangles = [], []
     for corners in polygons:
         for triangle in _fan_triangles(corners):
+            triangles.append(triangle)
             a, b, c = (points[triangle[:, i]] for i in range(3))
             normal = np.cross(b - a, c - a)  # twice the triangle's area, along its normal
             for i in range(3):
@@ -119,7 +120,35 @@ def winding_normals(points: np.ndarray, faces) -> tuple[np.ndarray | None, str |
         return None, (f"sheets=True: {zero.size} vertices have no normal from the faces (the first is vertex "
                       f"{zero[0]}: in no face, or between faces that cancel), so the normals are estimated from "
                       "the points instead. Give outward normals, or a mesh whose every vertex is in a face")
-    return summed / length[:, None], None
+    normals = summed / length[:, None]
+    inside_out, labels = _closed_parts_wound_inside_out(points, np.concatenate(triangles), np.concatenate(directed), n)
+    if not inside_out.any():
+        return normals, None
+    flip = inside_out[labels]
+    normals[flip] *= -1.0
+    warnings.warn(f"sheets=True: the faces of {int(inside_out.sum())} closed part(s) are wound inside out (their "
+                  f"normals faced in, at {int(flip.sum())} vertices); they are taken turned outward", stacklevel=3)
+    return normals, None
+
+
+def _closed_parts_wound_inside_out(points: np.ndarray, triangles: np.ndarray, directed: np.ndarray,
+                                   n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per connected part, whether it is closed (every edge run by two faces) and encloses a
+    negative volume: wound so that its normals face in; and each vertex's part
+    (parts.connected_parts). An open part's winding is the mesh's choice and is kept."""
+    from .parts import connected_parts
+    labels, count = connected_parts(points, faces=triangles)
+    a, b, c = (points[triangles[:, i]] for i in range(3))
+    centre = points.mean(axis=0)  # the volume of a closed part does not depend on it; rounding does
+    volume = np.einsum("ij,ij->i", a - centre, np.cross(b - centre, c - centre))
+    enclosed = np.bincount(labels[triangles[:, 0]], weights=volume, minlength=count)
+    edges = directed[directed[:, 0] != directed[:, 1]]
+    undirected = np.sort(edges, axis=1)
+    keys, runs = np.unique(undirected[:, 0] * np.int64(n) + undirected[:, 1], return_counts=True)
+    open_edge = keys[runs == 1]
+    open_part = np.zeros(count, dtype=bool)
+    open_part[labels[open_edge // n]] = True
+    return ~open_part & (enclosed < 0.0), labels
 
 
 def _polygons_by_corner_count(faces) -> list:
