@@ -368,9 +368,10 @@ def test_the_finest_level_file_holds_the_inputs_own_coordinates(tmp_path, extens
 def test_a_base_in_another_vertex_order_is_warned_of(tmp_path):
     """--base with the decomposition's count but another vertex order (a cloud re-saved sorted)
     paired each point with another's detail: points moved a median of half the model's size, and
-    the command said nothing. Its --help asks for the same order; now a warning says it was not."""
+    the command said nothing. Its --help asks for the same order; now a warning says it was not.
+    1000 points: a shuffled base stretches its neighbours least on a small model."""
     rng = np.random.default_rng(4)
-    u = rng.normal(size=(3000, 3))
+    u = rng.normal(size=(1000, 3))
     points = u / np.linalg.norm(u, axis=1, keepdims=True) * [1.5, 1.0, 0.8]
     source = tmp_path / "ell.ply"
     io.write(source, io.Scan(points=points))
@@ -380,7 +381,25 @@ def test_a_base_in_another_vertex_order_is_warned_of(tmp_path):
     io.write(sorted_base, level0.with_geometry(level0.points[np.lexsort(level0.points.T)], None))
     lifted = tmp_path / "lifted.ply"
     io.write(lifted, level0.with_geometry(level0.points * [1.0, 1.0, 1.3] + [0.0, 0.0, 0.2], None))
-    for base, warned in ((sorted_base, True), (lifted, False)):
+    centimetres = tmp_path / "centimetres.ply"  # a uniform scale is an edit, however large
+    io.write(centimetres, level0.with_geometry(level0.points * 100.0, None))
+    for base, warned in ((sorted_base, True), (lifted, False), (centimetres, False)):
         done = run("reconstruct", str(tmp_path / "out"), "--base", str(base), "-o", str(tmp_path / f"r_{base.stem}.ply"))
         assert done.returncode == 0, done.stderr
         assert ("another vertex order" in done.stderr) == warned, done.stderr
+
+
+def test_float_colours_rounded_just_past_one_stay_fractions(tmp_path):
+    """Float colours of 0..1 with one value rounded to 1.0000001 were taken for 8-bit values and
+    written rounded: every colour 0 or 1, black (a reviewer's green, 253 at most, came out 1)."""
+    rng = np.random.default_rng(3)
+    colours = rng.uniform(0.0, 0.99, size=(200, 3))
+    colours[7, 1] = 1.0000001
+    scan = io.Scan(points=rng.normal(size=(200, 3)),
+                   vertex_attributes={"red": colours[:, 0], "green": colours[:, 1], "blue": colours[:, 2]})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        io.write(tmp_path / "c.pts", scan)
+    written = io.read(tmp_path / "c.pts").vertex_attributes
+    assert int(written["green"][7]) == 255
+    assert np.abs(written["red"].astype(float) - 255 * colours[:, 0]).max() <= 0.5

@@ -239,7 +239,7 @@ def cmd_reconstruct(args) -> None:
         gains = parse_gains(args.gains, dec.n_bands) if args.gains is not None else None  # "" is refused
         template = source if source is not None else io.Scan(points=dec.base)
         check_format_holds(out.suffix.lower(), template, args.decomposition, points=dec.base, shown=out)
-        base = read_base(args.base, dec.n_points, source, dec.base) if args.base else None
+        base = read_base(args.base, dec.n_points, source, dec.base, args.threads) if args.base else None
         points, reference = reconstruct_with_normals(dec, gains, base, args.threads, progress.stage("reconstructing"))
         if not np.isfinite(points).all():
             raise ValueError(f"--gains {args.gains} overflow: the result has infinite coordinates")

@@ -124,7 +124,7 @@ def _few_vertices(scan, points: np.ndarray, count: int = 8):
                    faces=faces, face_attributes=face_attributes, format_info=scan.format_info)
 
 
-def read_base(path: str, n_points: int, source, stored=None):
+def read_base(path: str, n_points: int, source, stored=None, threads: int = 0):
     """The edited level 0 of `path`, (n, 3), checked against the decomposition: the same vertex
     count and, when both files have faces, the same faces (STL, say, renumbers its vertices on
     reading, which would pair each vertex with another's detail). stored: the decomposition's
@@ -138,34 +138,39 @@ def read_base(path: str, n_points: int, source, stored=None):
                          "not in the input's order (edit a level file in a format that keeps vertex order, "
                          "such as PLY)")
     if stored is not None:
-        _warn_if_reordered(path, base.points, stored)
+        _warn_if_reordered(path, base.points, stored, threads)
     return base.points
 
 
-#: The median stretch of the edges between nearest neighbours beyond which a base is taken for
-#: one in another vertex order: an edit that stretches the surface itself 20 times is no edit.
-REORDERED_STRETCH = 20.0
+#: The median stretch of the edges between nearest neighbours, beyond the stretch of the whole
+#: model (a uniform scale: metres to centimetres), past which a base is taken for one in another
+#: vertex order. A shuffled base stretches them by about half the model's size over its sample
+#: spacing: 37 times on an 8000-point sphere, 12 on a 1000-point one; an edit that stretches the
+#: surface itself 5 times at most of its points is no edit.
+REORDERED_STRETCH = 5.0
 
 
-def _warn_if_reordered(path: str, base: np.ndarray, stored: np.ndarray) -> None:
+def _warn_if_reordered(path: str, base: np.ndarray, stored: np.ndarray, threads: int) -> None:
     """A base in another vertex order (a point cloud re-saved sorted, or shuffled) has its count,
     yet pairs each point with another's detail: the result is garbage. Its points lie far from
     the points that neighbour them in the decomposition's level 0, which no edit does."""
     from .. import _core
     if len(stored) < 2:
         return
-    rows = _core.knn_within_parts(stored, np.zeros(len(stored), dtype=np.int32), k=2, threads=0).astype(np.int64)
+    rows = _core.knn_within_parts(stored, np.zeros(len(stored), dtype=np.int32), k=2, threads=threads).astype(np.int64)
     before = np.linalg.norm(stored[rows[:, 1]] - stored, axis=1)
     after = np.linalg.norm(base[rows[:, 1]] - base, axis=1)
     use = before > 0.0
-    if not use.any():
+    size_before = float(np.linalg.norm(np.ptp(stored, axis=0)))
+    size_after = float(np.linalg.norm(np.ptp(base, axis=0)))
+    if not use.any() or not size_before > 0.0 or not size_after > 0.0:
         return
-    stretch = float(np.median(after[use] / before[use]))
+    stretch = float(np.median(after[use] / before[use])) / (size_after / size_before)
     if stretch > REORDERED_STRETCH:
         warnings.warn(f"--base {path}: points that neighbour each other in the decomposition's level 0 lie a median "
-                      f"{stretch:.0f} times farther apart in it; it looks like level 0 in another vertex order, which "
-                      "pairs each vertex with another's detail (edit level_0 in a format and tool that keep the "
-                      "vertex order, such as PLY)")
+                      f"{stretch:.0f} times farther apart in it (for its size); it looks like level 0 in another "
+                      "vertex order, which pairs each vertex with another's detail (edit level_0 in a format and tool "
+                      "that keep the vertex order, such as PLY)")
 
 
 def _same_faces(a, b) -> bool:

@@ -100,11 +100,16 @@ def check_integer_range(values: np.ndarray, dtype: np.dtype, what: str) -> None:
                          f"outside {info.min}..{info.max}")
 
 
+#: How far past 0 or 1 float colours may round and still be read as fractions of 0..1 (clipped).
+FRACTION_SLACK = 1e-3
+
+
 def eight_bit_colours(channels: dict, where: str) -> tuple[dict, str | None]:
     """(name -> uint8 values, a note of what was lost or None) for a format that stores colours
     as 0..255 (PTS, and E57 as pye57 writes it). The channels are judged together, so that they
     stay one colour:
-      floats all within 0..1   255 * v, rounded; the note says so when that changes them;
+      floats all within 0..1   255 * v, rounded (within FRACTION_SLACK of it: clipped first);
+                               the note says so when that changes them;
       all within 0..255        8-bit values, whatever their field's width (many photogrammetry
                                exporters put 8-bit colours in LAS's 16-bit fields): kept
                                exactly (fractions rounded, and the note says so);
@@ -114,10 +119,15 @@ def eight_bit_colours(channels: dict, where: str) -> tuple[dict, str | None]:
     names = ", ".join(values)
     stacked = np.concatenate([v.ravel() for v in values.values()]).astype(np.float64)
     top = float(stacked.max(initial=0))
+    fractions = (any(v.dtype.kind == "f" for v in values.values()) and np.isfinite(stacked).all()
+                 and float(stacked.min(initial=0)) >= -FRACTION_SLACK and top <= 1 + FRACTION_SLACK)
+    if fractions:  # a renderer's 0..1 colours, a rounding past either end included
+        values = {name: np.clip(v.astype(np.float64), 0.0, 1.0) for name, v in values.items()}
+        stacked, top = np.clip(stacked, 0.0, 1.0), min(top, 1.0)
     if stacked.size and (not np.isfinite(stacked).all() or stacked.min() < 0 or top > 65535):
         raise ValueError(f"{where}: colours {names} hold values outside 0..65535 (or not finite); a colour is 0..1, "
                          "0..255 (8-bit) or 0..65535 (16-bit)")
-    if any(v.dtype.kind == "f" for v in values.values()) and top <= 1:
+    if fractions:
         scale, what = 255.0, f"colours {names} of 0..1 written as 255 * value, rounded"
     elif top <= 255:
         scale, what = 1.0, f"colours {names} with fractions written rounded to whole numbers"
