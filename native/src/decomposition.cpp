@@ -219,14 +219,14 @@ MultiscaleModel decompose_levels(Points points, const Points* input_normals, Poi
     stage.report(0.05);
     Projection projection = project_level(fine, decimated, options, sheets, stage.sub(0.1, 0.8));
     LevelSupport& support = model.support[l - 1];
-    const Points anchor_reference = build_support(fine, projection, decimated, original, options, sheets.on, support);
+    Points anchor_reference = build_support(fine, projection, decimated, original, options, sheets.on, support);
     Points coarse = std::move(projection.projected.positions);
     Points normals;
     const Consistency consistency = make_offsets_normal(fine, coarse, support, decimated.groups, anchor_reference, scale,
                                                         options.consistency_iterations, stage.sub(0.8, 1.0),
                                                         model.details.row(l - 1), normals);
     decimated.groups = LabelGroups();
-    turns.add(l, coarse, std::move(normals), model.support, original);
+    turns.add(l, coarse, std::move(normals), model.support, original, step == 0 ? &anchor_reference : nullptr);
     fine = std::move(coarse);
     model.reports[l - 1] = level_report(support, projection, consistency);
   }

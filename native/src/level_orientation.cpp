@@ -7,6 +7,7 @@
 #include "pointscale/normal_estimation.h"
 #include "pointscale/spatial_index.h"
 #include "pointscale/detail/level_normals.h"
+#include "pointscale/detail/spanning_orientation.h"
 
 namespace pointscale {
 
@@ -24,6 +25,15 @@ Points oriented_anchor_normals(const Points& anchors, const LevelSupport& suppor
   // tube is 3 anchors wide, the plain weight turned half of it inward.
   orient_normals(SpatialIndex(anchors), normals, std::min<int>(12, support.clusters), true);
   return normals;
+}
+
+void orient_cluster_normals(const Points& anchors, Points& normals, const LevelSupport& support) {
+  const int width = std::min<int>(12, support.neighbors);
+  IndexList rows(static_cast<std::size_t>(support.clusters) * width);
+  for (Index c = 0; c < support.clusters; ++c)
+    std::copy_n(support.neighborhoods.data() + static_cast<std::size_t>(c) * support.neighbors, width,
+                rows.data() + static_cast<std::size_t>(c) * width);
+  orient_along_spanning_tree(anchors, normals, std::move(rows), width, true);
 }
 
 Points orientation_reference(const Points& level, const LevelSupport& support) {

@@ -50,7 +50,7 @@ std::vector<signed char> turn_signs(const FloatNormals& finer_normals, const Poi
 }  // namespace
 
 void LevelTurns::add(int l, const Points& level, Points normals, const std::vector<LevelSupport>& support,
-                     const IndexList& original) {
+                     const IndexList& original, Points* cluster_normals) {
   if (orient_finest_ && l == bands_) sureness_.assign(static_cast<std::size_t>(level.rows()), 1.0f);
   if (l < bands_)
     turns_[l] = turn_signs(finer_normals_, finer_anchors_, support[l], normals, original,
@@ -58,7 +58,10 @@ void LevelTurns::add(int l, const Points& level, Points normals, const std::vect
   finer_anchors_ = support_centroids(level, support[l - 1]);
   if (orient_finest_ && l == bands_) {
     const LevelSupport& finest = support[l - 1];
-    const Points reference = oriented_anchor_normals(finer_anchors_, finest);
+    Points found;
+    if (!cluster_normals) found = anchor_normals(finer_anchors_, finest);
+    Points& reference = cluster_normals ? *cluster_normals : found;
+    orient_cluster_normals(finer_anchors_, reference, finest);
     finest_flipped_.resize(static_cast<std::size_t>(level.rows()));
     parallel_for(finest_flipped_.size(), [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) {
