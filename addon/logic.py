@@ -377,7 +377,18 @@ def engine_message(message: str, neighbors: int, levels: int) -> str:
                                              "Displace modifier) to have detail to edit")
     if message.startswith(SHEETS_REFUSAL):
         return sheets_message(message)
+    message = MIRROR_SEAM_HINT.sub(_mirror_seam_in_blender_words, message)
     return parts_message(message, neighbors, levels).replace("sheets=True", "Keep Thin Sheets Apart")
+
+
+#: The engine's hint for a half with points across its mirror plane, in Python's terms.
+MIRROR_SEAM_HINT = re.compile(r"\(or a seam of at least ([0-9.e+-]+) if those points belong on the plane\)")
+
+
+def _mirror_seam_in_blender_words(match) -> str:
+    """The seam a Mirror modifier gives is half its Merge distance (mirror_modifier.mirror_planes)."""
+    return (f"(or, if those vertices belong on the plane, set the Mirror modifier's Merge distance to at least "
+            f"{2.0 * float(match.group(1)):.3g})")
 
 
 def _panel_setting(keyword: str, value: str) -> str:

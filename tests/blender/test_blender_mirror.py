@@ -207,3 +207,14 @@ def test_bisect_keeps_the_merged_vertex_count():
     assert not near.any(), np.abs(level0[~seam, 0]).min()
     for state, shown in shown_states(obj):
         assert len(shown) == merged, state
+
+
+def test_a_whole_mesh_under_a_mirror_modifier_is_refused_in_blender_words():
+    """A whole sphere (not a half) under a Mirror modifier: the engine's refusal offered "a seam
+    of at least ...", a setting Blender does not have; it now names the modifier's Merge distance
+    (the seam is half of it)."""
+    import pointscale as ps
+    v, f = ps.meshes.uv_sphere(1.0, 32, 16)
+    obj = h.mesh_object(v, f, name="Whole")
+    obj.modifiers.new("Mirror", "MIRROR")
+    h.assert_refused(obj, "decompose", "Merge distance to at least")
