@@ -58,9 +58,8 @@ void LevelTurns::add(int l, const Points& level, Points normals, const std::vect
   finer_anchors_ = support_centroids(level, support[l - 1]);
   if (orient_finest_ && l == bands_) {
     const LevelSupport& finest = support[l - 1];
-    Points found;
-    if (!cluster_normals) found = anchor_normals(finer_anchors_, finest);
-    Points& reference = cluster_normals ? *cluster_normals : found;
+    if (!cluster_normals) throw std::logic_error("LevelTurns: the finest level needs its clusters' normals");
+    Points& reference = *cluster_normals;
     orient_cluster_normals(finer_anchors_, reference, finest);
     finest_flipped_.resize(static_cast<std::size_t>(level.rows()));
     parallel_for(finest_flipped_.size(), [&](std::size_t b, std::size_t e) {

@@ -22,8 +22,8 @@ class LevelTurns {
   // Level l-1 is built: its points (level), its unoriented normals and, in support[l-1], its
   // support; support[l] is the finer level's. original: the points' input numbers
   // (cluster_layout.h), by which the finer support's frames list each cluster's points.
-  // cluster_normals: for the finest level (the first added) with orient_finest, its clusters'
-  // normals at their anchors (#C by 3, either sign; the projection's), which it orients.
+  // cluster_normals: needed for the finest level (the first added) with orient_finest: its
+  // clusters' normals at their anchors (#C by 3, either sign; the projection's), which it orients.
   void add(int l, const Points& level, Points normals, const std::vector<LevelSupport>& support,
            const IndexList& original, Points* cluster_normals = nullptr);
 
