@@ -135,6 +135,59 @@ inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std:
   return kind;
 }
 
+// The smallest root in (0, 1) of a + b x + c x^2, which is positive at 0 and not at 1; 1 where
+// rounding hides it.
+double first_root(double a, double b, double c) {
+  double lo = 0.0, hi = 1.0;
+  // Bisection: the quadratic's closed form loses its digits where c is tiny against b, and
+  // 40 halvings (1e-12) cost nothing next to the ring's sums, at the folds only.
+  for (int k = 0; k < 40; ++k) {
+    const double x = 0.5 * (lo + hi);
+    if (a + x * (b + x * c) > 0.0) lo = x; else hi = x;
+  }
+  return lo > 0.0 ? lo : 1.0;
+}
+
+// The largest share mu of slot s's offsets, and of its ring members' (each from its own base
+// position, all by the same share), at which the ring at s would no longer fold: the crossing
+// test along an edge is linear in mu, the plane test quadratic. The limiter's first guess at
+// how far a fold's gain must go: on its plateau the ring's members share the fold's limiter.
+// Tests that do not fail at mu = 1 are left out (they hold on the whole way down, or dip
+// below only in between: the rounds after catch those). 1 where nothing fails.
+double unfolding_share(const FoldReference& ref, std::uint16_t skip, std::uint16_t exempt, const SlotRows* edited,
+                       const SlotRows& r, Index s) {
+  const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
+  Vec3 t1, t2;
+  tangents(ref.normals.row(s).transpose(), t1, t2);
+  const Vec3 bi = ref.base.row(s).transpose();
+  const Vec3 ri = r(s);
+  const Vec3 ei = edited ? (*edited)(s) : Vec3::Zero();
+  Vec3 mr0 = Vec3::Zero(), mr1 = Vec3::Zero(), mb0 = Vec3::Zero(), mb1 = Vec3::Zero();
+  double share = 1.0;
+  for (int m = 1; m < ref.ring_size; ++m) {
+    if ((skip >> m) & 1u) continue;
+    const Index j = ring[m];
+    const Vec3 d0 = ref.base.row(j).transpose() - bi;
+    const Vec3 db = edited ? Vec3((*edited)(j) - ei) : d0;
+    const Vec3 dr = r(j) - ri;
+    if (reversed(dr, db) && !((exempt >> m) & 1u)) {
+      const double bb = db.squaredNorm();
+      share = std::min(share, bb / (bb - dr.dot(db)));
+    }
+    const double u0 = d0.dot(t1), u1 = d0.dot(t2);
+    mr0 += u0 * dr;
+    mr1 += u1 * dr;
+    mb0 += u0 * db;
+    mb1 += u1 * db;
+  }
+  const Vec3 nb = mb0.cross(mb1);
+  if (!((exempt | skip) & 1u) && reversed(mr0.cross(mr1), nb)) {
+    const Vec3 d0 = mr0 - mb0, d1 = mr1 - mb1;
+    share = std::min(share, first_root(nb.dot(nb), (d0.cross(mb1) + mb0.cross(d1)).dot(nb), d0.cross(d1).dot(nb)));
+  }
+  return share;
+}
+
 // Whether the stored base's ring at slot s spreads along one line only (its tangent spread
 // across the line below on_a_line_spread of that along it): a strip of duplicated or collinear
 // scan points. Such a ring has no plane to turn over; its plane test would read the rounding
@@ -380,8 +433,13 @@ void claim_moved(const IndexList& dirty, const ZeroedArray<std::uint8_t>& moved,
   });
 }
 
-// The round of folding (its strength rising each time) in which a point's ring first takes its strength too.
+// The round of folding (its strength rising each time) in which a point's ring first takes its
+// strength too, or the strength at which it does, whichever comes first: rounds at the step
+// alone (1/2, 3/4, ...) reach that strength in their tenth.
+constexpr int hand_on_round = 3;
 constexpr int stubborn_rounds = 10;
+// The share of a fold's gain the limiter leaves it, of what unfolding_share says would just do.
+constexpr double unfolding_margin = 0.8;
 
 FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,
                             const Vec3& origin, Eigen::Ref<Points> result, const FoldLimitOptions& options) {
@@ -419,6 +477,7 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
   // step of where the layer below changed: a round recomputes just that, and late rounds,
   // with few folds left, cost little.
   const int passes = 2 * options.smoothing;
+  const bool exempting = !ref.exempt.empty();
   std::vector<ZeroedArray<double>> layer;
   for (int k = 0; k <= passes; ++k) layer.emplace_back(n);
   ZeroedArray<double>& strength = layer.front();
@@ -428,13 +487,16 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
   for (std::size_t i = 0; i < n; ++i)
     if (out.before[i] != fold_none) folds.push_back(ref.slot[i]);
 
-  // A point that still folds once its own gain is all but gone folds because of its ring: the
-  // averaging leaves each ring member a share of its gain (about 1% on a sharp CAD edge), and on
-  // a ring with hardly any plane that share keeps the fold. From its stubborn_rounds-th round of
-  // folding on, such a point hands its strength on to its ring's members, which then limit like
-  // folds of their own (and, holding that strength, hand it on at once if they fold too).
-  double stubborn = 0.0;  // the strength a point reaches in its stubborn_rounds-th round of folding
+  // A point that still folds after its ring's own guess (unfolding_share) and a round more, or
+  // once its own gain is all but gone, folds because of its ring: the averaging leaves each ring
+  // member a share of its gain (about 1% on a sharp CAD edge), and on a ring with hardly any
+  // plane that share keeps the fold. From its hand_on_round-th round of folding on, or once its
+  // strength reaches that of the step's tenth round, such a point hands its strength on to its
+  // ring's members, which then limit like folds of their own (and, holding that strength, hand
+  // it on at once if they fold too).
+  double stubborn = 0.0;  // the strength the step alone gives in a point's stubborn_rounds-th round of folding
   for (int k = 0; k < stubborn_rounds; ++k) stubborn = 1.0 - options.step * (1.0 - stubborn);
+  ZeroedArray<std::uint8_t> times_folded(n);  // rounds each slot has folded in, up to 255
   while (!folds.empty() && out.rounds < options.max_rounds) {
     ++out.rounds;
     // In point order, whatever order the tests found them in: a stubborn fold hands on the
@@ -442,9 +504,24 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
     std::sort(folds.begin(), folds.end(), [&](Index x, Index y) {
       return ref.order[static_cast<std::size_t>(x)] < ref.order[static_cast<std::size_t>(y)];
     });
-    for (Index f : folds) {
-      double& w = strength[static_cast<std::size_t>(f)];
-      w = 1.0 - options.step * (1.0 - w);
+    // Each fold's strength rises by the step, or at once as far as its ring says it must
+    // (unfolding_share, with a margin: the ring's members keep a little more of their gain
+    // than the fold itself), whichever is more: a fold far over takes one round, not ten.
+    const ZeroedArray<double>& limiter_now = layer.back();
+    std::vector<double> guess(folds.size());
+    parallel_for(folds.size(), [&](std::size_t b, std::size_t e) {
+      for (std::size_t k = b; k < e; ++k) {
+        const std::size_t f = static_cast<std::size_t>(folds[k]);
+        const double share = unfolding_share(ref, ref.other_sheet[f], exempting ? ref.exempt[f] : 0, e_rows, r,
+                                             folds[k]);
+        guess[k] = 1.0 - unfolding_margin * share * (1.0 - limiter_now[f]);
+      }
+    }, {}, 256);
+    for (std::size_t k = 0; k < folds.size(); ++k) {
+      double& w = strength[static_cast<std::size_t>(folds[k])];
+      w = std::max(1.0 - options.step * (1.0 - w), guess[k]);
+      std::uint8_t& c = times_folded[static_cast<std::size_t>(folds[k])];
+      if (c < 255) ++c;
     }
     // Each layer again where the one below changed, and one ring step around it: the largest
     // (widening) or the mean (averaging) of each point and its neighbours, the mean adding up
@@ -454,7 +531,7 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
       if (marks.claim(f)) dirty.push_back(f);
     for (Index f : folds) {
       const double w = strength[static_cast<std::size_t>(f)];
-      if (w < stubborn) continue;
+      if (w < stubborn && times_folded[static_cast<std::size_t>(f)] < hand_on_round) continue;
       const Index* ring = ref.rings.data() + static_cast<std::size_t>(f) * width;
       for (std::size_t m = 1; m < width; ++m) {
         const Index j = ring[m];

@@ -107,12 +107,17 @@ struct FoldLimitReport {
 // the reconstruction used (refitting them for the lowered gains would move every point within
 // a kernel width of a fold, at every level). Each round, every point that folds gets a
 // strength w: 1 - step the first time, and halfway (by step) closer to 1 each round it still
-// folds. The limiter is lambda = 1 - A^s D^s w, where D takes the largest w over a point and
+// folds, or at once what its ring asks for, whichever is more. Its ring asks for 1 - 0.8 mu
+// lambda_now: mu is the largest share of the ring's present offsets from their base positions
+// (the point's and its members', all scaled alike, as on the limiter's plateau) at which none
+// of its tests fails (each crossing edge's test is linear in mu, the plane test quadratic).
+// So a fold far over takes one round, not ten. The limiter is lambda = 1 - A^s D^s w, where D takes the largest w over a point and
 // the two-way ring neighbours (ring members and the points whose rings hold it) and A their
 // mean, each applied s = smoothing times: D^s keeps w on a plateau s steps wide around each
 // fold, and A^s ramps it down to 0 over s more steps, so the limiter reaches w at the fold
 // itself and falls smoothly to 1, exactly 1 beyond 2s ring steps from it. A point that folds in
-// a tenth round, its own gain all but gone, gives its strength to its ring's members too (the
+// a third round (after its ring's own ask and a round more), or with its own gain all but gone
+// (the strength of the step's tenth round), gives its strength to its ring's members too (the
 // averaging leaves them a share of their gain, which keeps a fold on a ring with hardly any
 // plane); they then count as folds of that strength, so around it the limiter reaches one ring
 // step further, and a member that folds as well hands the strength on at once (the folds are
