@@ -412,9 +412,10 @@ MORPH_TOO_FEW = re.compile(r"^(points_a|points_b|base_points) has (\d+) points; 
 def morph_message(message: str, a_name: str, b_name: str, base_name: str | None = None) -> str:
     """The engine's refusal of a morph in the panel's terms: which object, in vertices, rather
     than its keyword (points_a, points_b, base_points)."""
-    found = MORPH_TOO_FEW.match(message)
-    if found is None:
-        return message
     which = {"points_a": f"object A '{a_name}'", "points_b": f"target B '{b_name}'",
-             "base_points": f"base object '{base_name}'"}[found.group(1)]
-    return f"{which} has {found.group(2)} vertices; Morph needs at least {found.group(3)}"
+             "base_points": f"base object '{base_name}'"}
+    found = MORPH_TOO_FEW.match(message)
+    if found is not None:
+        return f"{which[found.group(1)]} has {found.group(2)} vertices; Morph needs at least {found.group(3)}"
+    # Any other refusal names the keyword too ("all points_b are identical: they define no surface").
+    return re.sub(r"\b(points_a|points_b|base_points)\b", lambda m: f"the vertices of {which[m.group(1)]}", message)

@@ -143,3 +143,15 @@ def test_the_pure_modules_import_without_bpy():
             "[addon_module(m) for m in ('logic', 'compute', 'recipe', 'job', 'mirror_modifier')]")
     proc = subprocess.run([sys.executable, "-c", code, str(Path(__file__).parent)], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr[-2000:]
+
+
+def test_every_morph_refusal_names_the_object_not_the_keyword(logic):
+    # Only the too-few refusal was put in the panel's words; "all points_b are identical" reached
+    # Blender's report as the engine's keyword.
+    said = logic.morph_message("all points_b are identical: they define no surface", "Head", "Skull")
+    assert said == "all the vertices of target B 'Skull' are identical: they define no surface"
+    said = logic.morph_message("base_points must have shape (n, 3), got (4, 2)", "Head", "Skull", "Egg")
+    assert said == "the vertices of base object 'Egg' must have shape (n, 3), got (4, 2)"
+    said = logic.morph_message("points_a has 3 points; at least 8 are needed", "Head", "Skull")
+    assert said == "object A 'Head' has 3 vertices; Morph needs at least 8"
+    assert logic.morph_message("A and B barely overlap", "Head", "Skull") == "A and B barely overlap"
