@@ -171,9 +171,9 @@ def _morph_words(message: str) -> str:
 
 
 def morph_keys(ps, a: np.ndarray, b: np.ndarray, base_points: np.ndarray | None = None, samples: int = 40000,
-               align: str = "NONE"):
+               align: str = "NONE", progress=None):
     """Eq. 22 as three arrays and the engine's warnings: (projected A, A + alpha detail at (1,0),
-    at (0,1), warnings).
+    at (0,1), warnings). progress: the engine's callback (fraction -> False to cancel), or None.
 
     p(alpha, beta) is linear in alpha and beta (also with alignment, whose placement follows
     beta linearly), so Blender's relative keys ``A detail`` = p(1,0) and ``B detail`` = p(0,1)
@@ -187,7 +187,7 @@ def morph_keys(ps, a: np.ndarray, b: np.ndarray, base_points: np.ndarray | None 
         base_points = np.asarray(base_points, dtype=np.float64)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        m = ps.morph(a, b, base_points, align=align.lower(), base_samples=samples)
+        m = ps.morph(a, b, base_points, align=align.lower(), base_samples=samples, progress=progress)
     # The engine's overlap warning speaks Python: say it in the panel's words.
     messages = tuple(_morph_words(str(w.message)) for w in caught
                      if not str(w.message).startswith("A and B barely overlap"))

@@ -13,7 +13,7 @@ import bpy
 import numpy as np
 
 from .. import compute, engine, keys, mesh_io, mirror_modifier, preferences, state, storage, writeback
-from ..job import Job
+from ._background import RunsInBackground
 from ._common import set_mode
 
 
@@ -150,7 +150,7 @@ def _decompose_fitting_parts(ps, points, kwargs, progress):
     return layout, kwargs
 
 
-class POINTSCALE_OT_decompose(bpy.types.Operator):
+class POINTSCALE_OT_decompose(RunsInBackground, bpy.types.Operator):
     """Split the mesh into a smooth base and detail bands (Level and Band shape keys).
     The Basis is read, never modified; faces are kept but not used"""
 
@@ -215,86 +215,39 @@ class POINTSCALE_OT_decompose(bpy.types.Operator):
         self.report({"INFO"}, f"Decomposed '{obj.name}': {n} vertices, {k + 1} levels, {k} bands")
         return {"FINISHED"}
 
-    # --- modal: the UI button
+    # --- modal: the UI button (_background.py)
     def invoke(self, context, event):
         if bpy.app.background or context.window is None:
             return self.execute(context)
+        return self.start_in_background(context)
+
+    def start_in_background(self, context):
         prepared = _prepare(self, context)
         if prepared is None:
             return {"CANCELLED"}
         points, kwargs = prepared
-        self._obj_name = context.active_object.name
-        self._obj_uid = context.active_object.session_uid  # names can change during the job
+        obj = context.active_object
+        self._obj_name = obj.name
+        self._obj_uid = obj.session_uid  # names can change during the job
         self._points = points
-        self._n = len(points)
         ps = engine.get()
-        self._job = Job(
-            lambda progress: _computed(ps, points, kwargs, progress),
-            cancelled_type=engine.cancelled_type(),
-            name="pointscale-decompose",
-        )
-        wm = context.window_manager
-        self._timer = wm.event_timer_add(preferences.get(context).poll_interval, window=context.window)
-        wm.modal_handler_add(self)
-        wm.progress_begin(0, 100)
-        state.running.add(self._obj_uid)
-        self._job.start()
-        self._status(context)
-        return {"RUNNING_MODAL"}
+        return self.start(context, lambda progress: _computed(ps, points, kwargs, progress),
+                          what=f"decomposing '{obj.name}' ({len(points)} vertices)", name="pointscale-decompose",
+                          cancelled_type=engine.cancelled_type(), busy=obj.session_uid)
 
-    def modal(self, context, event):
-        job = self._job
-        if event.type == "ESC" and event.value == "PRESS" and not job.cancelling:
-            job.cancel()  # the engine stops at its next progress call
-            self._status(context)
-            return {"RUNNING_MODAL"}
-        if event.type != "TIMER" or event.timer is not self._timer:
-            return {"PASS_THROUGH"}  # the UI stays responsive
-        if job.running:
-            context.window_manager.progress_update(100.0 * job.fraction)
-            self._status(context)
-            return {"RUNNING_MODAL"}
-        self._cleanup(context)
-        if job.cancelled:
-            self.report({"WARNING"}, "Decompose cancelled; the mesh is unchanged")
-            return {"CANCELLED"}
-        if job.error is not None:
-            self.report({"ERROR"}, f"Decompose '{self._obj_name}': {job.error}")
-            return {"CANCELLED"}
+    cancelled_report = "Decompose cancelled; the mesh is unchanged"
+
+    def failed(self, error) -> str:
+        self._points = None
+        return f"Decompose '{self._obj_name}': {error}"
+
+    def finished(self, context, result):
+        points, self._points = self._points, None  # the finished operator keeps no arrays
         obj = next((o for o in bpy.data.objects if o.session_uid == self._obj_uid), None)
         if obj is None:
             self.report({"ERROR"}, f"'{self._obj_name}' disappeared while it was being decomposed")
             return {"CANCELLED"}
-        # Blender keeps the finished operator (redo, the Info log): let it keep no arrays.
-        result, points = job.result, self._points
-        self._job = self._points = None  # the job's closure holds the points and edges too
         return self._finish(context, obj, result, points)
-
-    def cancel(self, context):
-        # Blender ends the modal itself (file load, quit): stop the worker, drop the result.
-        self._job.cancel()
-        self._job.wait()
-        self._cleanup(context)
-
-    def _status(self, context):
-        job = self._job
-        what = "cancelling..." if job.cancelling else f"{100 * job.fraction:.0f}%"
-        text = (f"Multiscale: decomposing '{self._obj_name}' ({self._n} vertices) {what}  "
-                f"{job.elapsed:.0f} s  |  Esc to cancel")
-        if context.workspace is not None:
-            context.workspace.status_text_set(text)
-        if context.area is not None:
-            context.area.tag_redraw()
-
-    def _cleanup(self, context):
-        state.running.discard(self._obj_uid)
-        wm = context.window_manager
-        if getattr(self, "_timer", None) is not None:
-            wm.event_timer_remove(self._timer)
-            self._timer = None
-            wm.progress_end()
-        if context.workspace is not None:
-            context.workspace.status_text_set(None)
 
 
 CLASSES = [POINTSCALE_OT_decompose]

@@ -6,6 +6,7 @@ import bpy
 import numpy as np
 
 from .. import compute, engine, keys, logic, mesh_io, state, storage, writeback
+from ._background import RunsInBackground
 from ._common import set_mode
 
 
@@ -127,7 +128,7 @@ def _included_collections(layer_collection) -> set:
     return found
 
 
-class POINTSCALE_OT_morph(bpy.types.Operator):
+class POINTSCALE_OT_morph(RunsInBackground, bpy.types.Operator):
     """Create a new object: A projected onto a common base, with relative keys 'A detail' (alpha)
     and 'B detail' (beta); A and B are not modified"""
 
@@ -143,26 +144,72 @@ class POINTSCALE_OT_morph(bpy.types.Operator):
             return False
         return True
 
-    def execute(self, context):
+    def _prepare(self, context):
+        """Reads A, B and the base on the main thread: (a, b, base, settings) or None after a report."""
         problem = morph_problem(context)
         if problem:
             self.report({"ERROR"}, problem)
-            return {"CANCELLED"}
+            return None
         a_obj = context.active_object
         problem = set_mode(a_obj, "OBJECT")
         if problem:
             self.report({"ERROR"}, f"Morph: {problem}")
-            return {"CANCELLED"}
+            return None
         s = a_obj.data.multiscale
         b_obj = s.morph_target or next(o for o in context.selected_objects if o is not a_obj and o.type == "MESH")
+        self._names = (a_obj.name, b_obj.name, s.morph_base_object.name if s.morph_base == "OBJECT" else None)
+        self._a_uid, self._b_uid = a_obj.session_uid, b_obj.session_uid  # names can change during the job
         a = mesh_io.read_basis(a_obj.data).astype(np.float64)
         b = _world_points(b_obj, a_obj)
         base = _world_points(s.morph_base_object, a_obj) if s.morph_base == "OBJECT" else None
+        return a, b, base, (s.morph_samples, s.morph_align)
+
+    # --- synchronous: scripts, background mode, redo
+    def execute(self, context):
+        prepared = self._prepare(context)
+        if prepared is None:
+            return {"CANCELLED"}
+        a, b, base, (samples, align) = prepared
         try:
-            p0, pa, pb, messages = compute.morph_keys(engine.get(), a, b, base, s.morph_samples, s.morph_align)
-        except ValueError as exc:  # the engine's keywords for A, B and the base, in the panel's terms
-            base_name = s.morph_base_object.name if s.morph_base == "OBJECT" else None
-            self.report({"ERROR"}, f"Morph: {logic.morph_message(str(exc), a_obj.name, b_obj.name, base_name)}")
+            # No progress callback: the engine may call it from its own threads, and bpy must
+            # only be touched from the main thread.
+            result = compute.morph_keys(engine.get(), a, b, base, samples, align)
+        except ValueError as exc:
+            self.report({"ERROR"}, self.failed(exc))
+            return {"CANCELLED"}
+        return self.finished(context, result)
+
+    # --- modal: the UI button (_background.py); A and B may be large (a 437k-vertex A takes
+    # seconds), and the morph writes nothing until it is done.
+    def invoke(self, context, event):
+        if bpy.app.background or context.window is None:
+            return self.execute(context)
+        return self.start_in_background(context)
+
+    def start_in_background(self, context):
+        prepared = self._prepare(context)
+        if prepared is None:
+            return {"CANCELLED"}
+        a, b, base, (samples, align) = prepared
+        ps = engine.get()
+        return self.start(context, lambda progress: compute.morph_keys(ps, a, b, base, samples, align, progress),
+                          what=f"morphing '{self._names[0]}' towards '{self._names[1]}' ({len(a)} vertices)",
+                          name="pointscale-morph", cancelled_type=engine.cancelled_type())
+
+    cancelled_report = "Create Morph cancelled; nothing was made"
+
+    def failed(self, error) -> str:
+        if isinstance(error, ValueError):  # the engine's keywords for A, B and the base, in the panel's terms
+            return f"Morph: {logic.morph_message(str(error), *self._names)}"
+        return f"Morph: {error}"
+
+    def finished(self, context, result):
+        p0, pa, pb, messages = result
+        by_uid = {o.session_uid: o for o in bpy.data.objects}
+        a_obj, b_obj = by_uid.get(self._a_uid), by_uid.get(self._b_uid)
+        if a_obj is None or b_obj is None or a_obj.type != "MESH" or len(a_obj.data.vertices) != len(p0):
+            self.report({"ERROR"}, f"Morph: '{self._names[0]}' or '{self._names[1]}' changed or disappeared while "
+                                   "the morph was computed; nothing was made")
             return {"CANCELLED"}
         try:
             obj = _new_morph_object(context, a_obj, b_obj, p0, pa, pb)
