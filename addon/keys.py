@@ -218,6 +218,7 @@ def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int, base_fi
     groups = owned_groups(mesh, old_k)  # recorded from now on, also when the list was not kept yet
     active = obj.active_shape_key.name if obj.active_shape_key is not None else None
     k = levels.shape[0]
+    existed = {kb.name for kb in key_blocks(mesh)} if key_blocks(mesh) is not None else set()
     kept = [BASE_PREVIOUS] if keep_edited_base(obj, mine, levels[0]) else []
     layout = [level_name(l) for l in range(k)] + [band_name(l) for l in range(k)]
     for l in range(k):
@@ -241,8 +242,24 @@ def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int, base_fi
     # The "(previous)" keys stay the add-on's: the next Decompose replaces them, Clear keeps them.
     mesh[OWNED] = layout + [name for name in KEPT if get(mesh, name) is not None and (name in mine or name in kept)]
     set_owned_groups(mesh, groups)
+    _in_layout_order(obj, layout, set(layout) - existed)
     _restore_active(obj, active)
     return kept
+
+
+def _in_layout_order(obj, layout: list, new: set) -> None:
+    """Puts the Level and Band keys in layout order (logic.keys_in_layout_order) with Blender's
+    Move Shape Key, which keeps every key's data, settings, animation and drivers as they are."""
+    import bpy
+
+    names = [kb.name for kb in obj.data.shape_keys.key_blocks]
+    moves = logic.moves_up(names, logic.keys_in_layout_order(names, layout, new))
+    if not moves:
+        return
+    with bpy.context.temp_override(object=obj, active_object=obj):
+        for index in moves:
+            obj.active_shape_key_index = index
+            bpy.ops.object.shape_key_move(type="UP")
 
 
 def _fingerprint(co) -> str:

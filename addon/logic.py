@@ -419,3 +419,41 @@ def morph_message(message: str, a_name: str, b_name: str, base_name: str | None 
         return f"{which[found.group(1)]} has {found.group(2)} vertices; Morph needs at least {found.group(3)}"
     # Any other refusal names the keyword too ("all points_b are identical: they define no surface").
     return re.sub(r"\b(points_a|points_b|base_points)\b", lambda m: f"the vertices of {which[m.group(1)]}", message)
+
+
+def keys_in_layout_order(names: list, layout: list, new: set) -> list:
+    """The shape key list ``names`` as a Decompose leaves it: the keys of ``layout`` (Level 0..k-1,
+    Band 0..k-1) in layout order, each key it added (``new``, at the end of the list) right after
+    the one before it in the layout (Level 2 after Level 1, Band 2 after Band 1), so that the
+    artist's keys keep their places beside the add-on's. Blender adds a key at the end: a
+    Decompose with more levels than the one before gave Basis, Level 0, Level 1, Band 0, Band 1,
+    Level 2, Band 2."""
+    out = [name for name in names if name not in new]
+    for i, name in enumerate(layout):
+        if name not in new:
+            continue
+        before = layout[i - 1] if i > 0 else None
+        out.insert(out.index(before) + 1 if before in out else len(out), name)
+    # The layout's keys in layout order in the places they hold (an older add-on may have left
+    # them otherwise); every other key keeps its place.
+    wanted = set(layout)
+    slots = [i for i, name in enumerate(out) if name in wanted]
+    ordered = [name for name in layout if name in out]
+    for slot, name in zip(slots, ordered):
+        out[slot] = name
+    return out
+
+
+def moves_up(names: list, target: list) -> list:
+    """How to turn the list ``names`` into ``target`` (the same names) by moving one entry up one
+    place at a time, as Blender's Move Shape Key does: the index of the entry to move, each time.
+    The first entry (the Basis) is never moved past."""
+    names, moves = list(names), []
+    for p in range(1, len(target)):
+        q = names.index(target[p])
+        while q > p:
+            moves.append(q)
+            names[q - 1], names[q] = names[q], names[q - 1]
+            q -= 1
+    return moves
+

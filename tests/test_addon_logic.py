@@ -155,3 +155,22 @@ def test_every_morph_refusal_names_the_object_not_the_keyword(logic):
     said = logic.morph_message("points_a has 3 points; at least 8 are needed", "Head", "Skull")
     assert said == "object A 'Head' has 3 vertices; Morph needs at least 8"
     assert logic.morph_message("A and B barely overlap", "Head", "Skull") == "A and B barely overlap"
+
+
+def test_a_decompose_with_more_levels_puts_its_new_keys_beside_their_kin(logic):
+    layout = ["Level 0", "Level 1", "Level 2", "Band 0", "Band 1", "Band 2"]
+    # Blender added the new keys at the end; the artist's 'Smile' sat between the levels and bands.
+    names = ["Basis", "Level 0", "Level 1", "Smile", "Band 0", "Band 1", "Level 2", "Band 2"]
+    target = logic.keys_in_layout_order(names, layout, {"Level 2", "Band 2"})
+    assert target == ["Basis", "Level 0", "Level 1", "Level 2", "Smile", "Band 0", "Band 1", "Band 2"]
+    # Moving one key up one place at a time (Blender's Move Shape Key) reaches it.
+    moved = list(names)
+    for q in logic.moves_up(names, target):
+        assert q >= 2  # never past the Basis
+        moved[q - 1], moved[q] = moved[q], moved[q - 1]
+    assert moved == target
+    # A fresh decomposition, and one with as many levels as before, move nothing.
+    fresh = ["Basis", "Smile"] + layout
+    assert logic.moves_up(fresh, logic.keys_in_layout_order(fresh, layout, set(layout))) == []
+    same = ["Basis"] + layout + ["Smile"]
+    assert logic.moves_up(same, logic.keys_in_layout_order(same, layout, set())) == []
