@@ -256,10 +256,13 @@ def _in_layout_order(obj, layout: list, new: set) -> None:
     moves = logic.moves_up(names, logic.keys_in_layout_order(names, layout, new))
     if not moves:
         return
-    with bpy.context.temp_override(object=obj, active_object=obj):
-        for index in moves:
-            obj.active_shape_key_index = index
-            bpy.ops.object.shape_key_move(type="UP")
+    try:
+        with bpy.context.temp_override(object=obj, active_object=obj):
+            for index in moves:
+                obj.active_shape_key_index = index
+                bpy.ops.object.shape_key_move(type="UP")
+    except RuntimeError:
+        pass  # Blender refused a move: the keys are all there and right, only listed out of order
 
 
 def _fingerprint(co) -> str:
