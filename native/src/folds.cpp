@@ -102,33 +102,43 @@ Vec3 ring_plane(const FoldReference& ref, std::uint16_t skip, const SlotRows& x,
   return m0.cross(m1);
 }
 
-// The FoldKind bits of slot s (folds.h has the definitions). skip: ring members left out of
-// both tests, and bit 0 the plane test on a ring with no plane; exempt: edges left out of the
-// crossing test, and bit 0 the plane test. The stored base's plane is the reference's
-// (base_planes); an edited base's is summed here.
-inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std::uint16_t exempt, const SlotRows* edited,
-                              const SlotRows& r, Index s) {
+// Walks the ring of slot s over the members skip leaves in: visit(m, db, dr, u0, u1) for the
+// edge from s to member m in the (edited) base (db) and in the result (dr), and the stored
+// base edge's tangent coordinates u0, u1 (the weights of the ring's plane sums, folds.h).
+template <class Visit>
+inline void walk_ring_edges(const FoldReference& ref, std::uint16_t skip, const SlotRows* edited, const SlotRows& r,
+                            Index s, Visit&& visit) {
   const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
   Vec3 t1, t2;
   tangents(ref.normals.row(s).transpose(), t1, t2);
   const Vec3 bi = ref.base.row(s).transpose();
   const Vec3 ri = r(s);
   const Vec3 ei = edited ? (*edited)(s) : Vec3::Zero();
-  // The result's plane is summed in the same pass as the crossing test: ring_plane's sums,
-  // without reading the ring twice.
-  Vec3 mr0 = Vec3::Zero(), mr1 = Vec3::Zero();
-  std::uint8_t kind = fold_none;
   for (int m = 1; m < ref.ring_size; ++m) {
     if ((skip >> m) & 1u) continue;
     const Index j = ring[m];
     const Vec3 d0 = ref.base.row(j).transpose() - bi;
     const Vec3 db = edited ? Vec3((*edited)(j) - ei) : d0;
     const Vec3 dr = r(j) - ri;
+    visit(m, db, dr, d0.dot(t1), d0.dot(t2));
+  }
+}
+
+// The FoldKind bits of slot s (folds.h has the definitions). skip: ring members left out of
+// both tests, and bit 0 the plane test on a ring with no plane; exempt: edges left out of the
+// crossing test, and bit 0 the plane test. The stored base's plane is the reference's
+// (base_planes); an edited base's is summed here.
+inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std::uint16_t exempt, const SlotRows* edited,
+                              const SlotRows& r, Index s) {
+  // The result's plane is summed in the same pass as the crossing test: ring_plane's sums,
+  // without reading the ring twice.
+  Vec3 mr0 = Vec3::Zero(), mr1 = Vec3::Zero();
+  std::uint8_t kind = fold_none;
+  walk_ring_edges(ref, skip, edited, r, s, [&](int m, const Vec3& db, const Vec3& dr, double u0, double u1) {
     if (reversed(dr, db) && !((exempt >> m) & 1u)) kind |= fold_crossed;
-    const double u0 = d0.dot(t1), u1 = d0.dot(t2);
     mr0 += u0 * dr;
     mr1 += u1 * dr;
-  }
+  });
   const Vec3 nr = mr0.cross(mr1);
   const Vec3 nb = edited ? ring_plane(ref, skip, *edited, s) : Vec3(ref.base_planes.row(s).transpose());
   if (reversed(nr, nb) && !((exempt | skip) & 1u)) kind |= fold_turned;
@@ -156,30 +166,18 @@ double first_root(double a, double b, double c) {
 // below only in between: the rounds after catch those). 1 where nothing fails.
 double unfolding_share(const FoldReference& ref, std::uint16_t skip, std::uint16_t exempt, const SlotRows* edited,
                        const SlotRows& r, Index s) {
-  const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
-  Vec3 t1, t2;
-  tangents(ref.normals.row(s).transpose(), t1, t2);
-  const Vec3 bi = ref.base.row(s).transpose();
-  const Vec3 ri = r(s);
-  const Vec3 ei = edited ? (*edited)(s) : Vec3::Zero();
   Vec3 mr0 = Vec3::Zero(), mr1 = Vec3::Zero(), mb0 = Vec3::Zero(), mb1 = Vec3::Zero();
   double share = 1.0;
-  for (int m = 1; m < ref.ring_size; ++m) {
-    if ((skip >> m) & 1u) continue;
-    const Index j = ring[m];
-    const Vec3 d0 = ref.base.row(j).transpose() - bi;
-    const Vec3 db = edited ? Vec3((*edited)(j) - ei) : d0;
-    const Vec3 dr = r(j) - ri;
+  walk_ring_edges(ref, skip, edited, r, s, [&](int m, const Vec3& db, const Vec3& dr, double u0, double u1) {
     if (reversed(dr, db) && !((exempt >> m) & 1u)) {
       const double bb = db.squaredNorm();
       share = std::min(share, bb / (bb - dr.dot(db)));
     }
-    const double u0 = d0.dot(t1), u1 = d0.dot(t2);
     mr0 += u0 * dr;
     mr1 += u1 * dr;
     mb0 += u0 * db;
     mb1 += u1 * db;
-  }
+  });
   const Vec3 nb = mb0.cross(mb1);
   if (!((exempt | skip) & 1u) && reversed(mr0.cross(mr1), nb)) {
     const Vec3 d0 = mr0 - mb0, d1 = mr1 - mb1;
