@@ -165,3 +165,18 @@ def morph_onto_bumpy_b(a, samples=3000):
     a.data.multiscale.morph_samples = samples
     assert bpy.ops.pointscale.morph() == {"FINISHED"}
     return bpy.context.active_object
+
+
+def two_models(scale=1):
+    """Objects 'A' (3000 vertices) and 'B' (2200, bumpier), B selected and A active, as
+    Create Morph takes them, and their points; scale multiplies both counts."""
+    import pointscale as ps
+
+    a = ps.shapes.bumpy_sphere(3000 * scale, coarse=0.05, coarse_frequency=3.0, fine=0.0)
+    b = ps.shapes.bumpy_sphere(2200 * scale, coarse=0.08, coarse_frequency=5.0, fine=0.0, seed=1) * np.array([1.0, 1.0, 1.1])
+    A = mesh_object(a, name="A")
+    B = mesh_object(b, name="B")
+    B.select_set(True)
+    A.select_set(True)
+    bpy.context.view_layer.objects.active = A
+    return A, B, a, b

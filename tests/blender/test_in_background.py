@@ -102,15 +102,7 @@ def _run(driver, context, *, esc_at=None, before_end=None, timeout=120.0):
 
 
 def _morph_models():
-    import pointscale as ps
-
-    a = ps.shapes.bumpy_sphere(6000, coarse=0.05, coarse_frequency=3.0, fine=0.0)
-    b = ps.shapes.bumpy_sphere(4000, coarse=0.08, coarse_frequency=5.0, fine=0.0, seed=1) * np.array([1.0, 1.0, 1.1])
-    A = h.mesh_object(a, name="A")
-    B = h.mesh_object(b, name="B")
-    B.select_set(True)
-    A.select_set(True)
-    bpy.context.view_layer.objects.active = A
+    A, B, _, _ = h.two_models(scale=2)
     return A, B
 
 

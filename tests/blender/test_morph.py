@@ -24,19 +24,6 @@ def _distance_to_surface(x, samples):
     return np.linalg.norm(x - foot, axis=1)
 
 
-def _two_models():
-    import pointscale as ps
-
-    a = ps.shapes.bumpy_sphere(3000, coarse=0.05, coarse_frequency=3.0, fine=0.0)
-    b = ps.shapes.bumpy_sphere(2200, coarse=0.08, coarse_frequency=5.0, fine=0.0, seed=1) * np.array([1.0, 1.0, 1.1])
-    A = h.mesh_object(a, name="A")
-    B = h.mesh_object(b, name="B")
-    B.select_set(True)
-    A.select_set(True)
-    bpy.context.view_layer.objects.active = A
-    return A, B, a, b
-
-
 class _StandIn:
     """Eq. 22 on top of pointscale.project: project both onto the base, carry B's detail by
     nearest neighbour onto A's samples."""
@@ -85,18 +72,18 @@ def test_morph_operator_wiring(monkeypatch):
     import pointscale as ps
 
     monkeypatch.setattr(ps, "morph", _StandIn, raising=False)
-    A, B, a, b = _two_models()
+    A, B, a, b = h.two_models()
     _check_morph(A, B, a, b, b_tolerance=0.02)
 
 
 def test_morph_with_the_engine():
-    A, B, a, b = _two_models()
+    A, B, a, b = h.two_models()
     _check_morph(A, B, a, b, b_tolerance=0.01)
 
 
 def test_a_target_moved_away_is_reported_and_aligned_on_request(capfd):
     """B three units from A: Align None says they barely overlap; Align Bounding Box lands on B."""
-    A, B, a, b = _two_models()
+    A, B, a, b = h.two_models()
     B.location = (3.0, 0.0, 0.0)
     bpy.context.view_layer.update()
     b_world = b + np.array([3.0, 0.0, 0.0])
