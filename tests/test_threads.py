@@ -1,5 +1,8 @@
 """The core releases the GIL, uses every core, and can be cancelled cleanly."""
 import os
+import subprocess
+import sys
+import textwrap
 import threading
 import time
 
@@ -35,46 +38,62 @@ def test_python_keeps_running_during_a_decompose(big):
     assert len(during) > 0.3 * elapsed / 0.005, (len(during), elapsed)
 
 
-def _threads_of_this_process() -> int:
-    return len(os.listdir("/proc/self/task"))
+def _thread_ids() -> set:
+    return set(os.listdir("/proc/self/task"))
 
 
-@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="needs two cores")
-@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="counts threads through Linux's /proc")
-def test_the_core_starts_a_second_thread(big):
-    # Counts the threads that exist during a projection, not how much CPU they got: a busy
-    # machine delays a worker but does not stop the core from starting it. How much the second
-    # core speeds things up is measured in bench/cores_bench.py, not asserted here.
-    surface = big[::3]
-    before = _threads_of_this_process()
-    seen = []
+def _cpu_ns(tid: str) -> int:
+    """CPU time of a thread of this process, in ns (Linux's per-thread CPU clock, read by its
+    thread id), or 0 when it has ended."""
+    try:
+        return time.clock_gettime_ns(((~int(tid)) << 3) | 6)
+    except OSError:
+        return 0
+
+
+# More CPU than a kept worker spends watching for the next loop after one ends (200 us).
+WORKED_NS = 1_000_000
+
+
+def _other_threads_that_worked(call) -> set:
+    """The threads other than the caller's that worked while call() ran: those that started
+    during it (thread ids are sampled every millisecond, so one that lives a millisecond is
+    seen; the sampler itself is left out), and those already there whose CPU time grew by more
+    than WORKED_NS (the core keeps its workers between calls)."""
+    time.sleep(0.01)  # a kept worker still watching after an earlier loop goes to sleep
+    me = str(threading.get_native_id())
+    before = {tid: _cpu_ns(tid) for tid in _thread_ids() - {me}}
+    seen = set()
+    sampler_id = []
     stop = threading.Event()
 
     def sampler():
+        sampler_id.append(str(threading.get_native_id()))
         while not stop.is_set():
-            seen.append(_threads_of_this_process())
+            seen.update(_thread_ids())
             time.sleep(0.001)
 
     t = threading.Thread(target=sampler)
     t.start()
     try:
-        ps.project(big, surface, threads=2)
+        call()
     finally:
         stop.set()
         t.join()
-    # `before` counts the main thread; the sampler adds one, a second core worker one more.
-    assert max(seen) >= before + 2, (before, max(seen))
-    # threads=1 keeps the work on the calling thread.
-    seen.clear()
-    stop.clear()
-    t = threading.Thread(target=sampler)
-    t.start()
-    try:
-        ps.project(big[:100000], surface, threads=1)
-    finally:
-        stop.set()
-        t.join()
-    assert max(seen) == before + 1, (before, max(seen))
+    grew = {tid for tid, ns in before.items() if _cpu_ns(tid) - ns > WORKED_NS}
+    return (grew | (seen - set(before))) - set(sampler_id) - {me}
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="needs two cores")
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="reads threads through Linux's /proc")
+def test_the_core_works_on_a_second_thread(big):
+    # Asks whether a second thread did work, not how much: a busy machine delays a worker but
+    # does not stop the core from handing it chunks. How much the second core speeds things up
+    # is measured in bench/cores_bench.py, not asserted here.
+    surface = big[::3]
+    assert _other_threads_that_worked(lambda: ps.project(big, surface, threads=2))
+    # threads=1 keeps the work on the calling thread, the kept worker included.
+    assert not _other_threads_that_worked(lambda: ps.project(big[:100000], surface, threads=1))
 
 
 def test_progress_reports_and_cancel_stops_cleanly(big):
@@ -151,35 +170,6 @@ def test_reconstruct_from_several_threads_on_one_decomposition_gives_each_its_ow
     assert "edit" in dec._cache
 
 
-def _thread_ids() -> set:
-    return set(os.listdir("/proc/self/task"))
-
-
-def _threads_started_during(call) -> set:
-    """The threads, other than the sampler, that this process started while call() ran: its
-    thread ids are sampled every millisecond, and ids only ever join the set when a thread
-    starts (one that ends before the first sample cannot be mistaken for a new one)."""
-    before = _thread_ids()
-    seen = set()
-    sampler_id = []
-    stop = threading.Event()
-
-    def sampler():
-        sampler_id.append(str(threading.get_native_id()))
-        while not stop.is_set():
-            seen.update(_thread_ids())
-            time.sleep(0.001)
-
-    t = threading.Thread(target=sampler)
-    t.start()
-    try:
-        call()
-    finally:
-        stop.set()
-        t.join()
-    return seen - before - set(sampler_id)
-
-
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="needs two cores")
 @pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="counts threads through Linux's /proc")
 def test_a_thread_count_holds_for_its_own_call_only(big):
@@ -187,7 +177,7 @@ def test_a_thread_count_holds_for_its_own_call_only(big):
     # which takes no thread count of its own.
     dec = ps.decompose(big[:100000], levels=3)
     ps.estimate_normals(big[:20000], threads=1)
-    assert _threads_started_during(lambda: ps.reconstruct(dec, base=dec.base * 1.01))
+    assert _other_threads_that_worked(lambda: ps.reconstruct(dec, base=dec.base * 1.01))
 
 
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="needs two cores")
@@ -195,22 +185,27 @@ def test_a_thread_count_holds_for_its_own_call_only(big):
 def test_two_threads_calling_at_once_keep_their_own_thread_counts(big):
     # Thread A decomposes with threads=1 and pauses in its first progress report while thread
     # B projects with threads=2; then A goes on. A's call must stay on A's own thread: no
-    # thread may start while A's later reports run. The reports come from the calling thread in
-    # the middle of each parallel loop, while that loop's workers are alive, so a worker A
-    # started would be seen. Nothing else starts a thread then (B has been joined, the main
-    # thread waits for A), and threads that end only leave the set of ids, so a count that is
-    # right cannot fail this by chance.
+    # thread may start, and no other thread may work, while A's later reports run. The reports
+    # come from the calling thread in the middle of each parallel loop, while that loop's
+    # workers are alive, so a worker A started or handed chunks would be seen. Nothing else
+    # works then (B has been joined, the main thread waits for A, and the core's kept worker,
+    # B's helper, has gone to sleep), and threads that end only leave the set of ids, so a
+    # count that is right cannot fail this by chance.
     a_started, b_joined = threading.Event(), threading.Event()
-    resumed = []  # the thread ids when A went on
+    resumed = []  # the thread ids and their CPU times when A went on
     started = []  # per report of A after that, the threads that were not there then
+    worked = []   # and those that were, with more CPU time than then
     errors = []
 
     def progress_a(fraction):
         if not a_started.is_set():
             a_started.set()
             assert b_joined.wait(300), "thread B did not finish"
-            resumed.append(_thread_ids())
-        started.append(_thread_ids() - resumed[0])
+            time.sleep(0.01)  # B's kept worker stops watching for another loop
+            me = str(threading.get_native_id())
+            resumed.append({tid: _cpu_ns(tid) for tid in _thread_ids() - {me}})
+        started.append(_thread_ids() - set(resumed[0]) - {str(threading.get_native_id())})
+        worked.append({tid for tid, ns in resumed[0].items() if _cpu_ns(tid) - ns > WORKED_NS})
         return True
 
     def run_a():
@@ -237,3 +232,67 @@ def test_two_threads_calling_at_once_keep_their_own_thread_counts(big):
     assert not errors, errors
     assert len(started) > 10, len(started)  # A reported often enough to have seen a worker
     assert not set().union(*started), [sorted(s) for s in started if s]
+    assert not set().union(*worked), [sorted(s) for s in worked if s]
+
+
+FORKED = textwrap.dedent("""
+    import os, sys, threading, time
+    import numpy as np, pointscale as ps
+    points = ps.shapes.bumpy_sphere(200000)
+    expected = ps.project(points[:50000], points[::3], threads=2)[0]  # the parent's kept worker
+    pid = os.fork()
+    if pid == 0:  # the child has no worker threads of its parent's: it must not wait for them
+        try:
+            got = ps.project(points[:50000], points[::3], threads=2)[0]
+            same = np.array_equal(got, expected)
+            threads = len(os.listdir("/proc/self/task"))  # the child's own kept worker, and itself
+            os._exit(0 if same and threads >= 2 else 3)
+        except BaseException:
+            os._exit(4)
+    for _ in range(1200):  # at most two minutes
+        done, status = os.waitpid(pid, os.WNOHANG)
+        if done:
+            print("child", os.waitstatus_to_exitcode(status))
+            break
+        time.sleep(0.1)
+    else:
+        os.kill(pid, 9)
+        print("child hung")
+""")
+
+
+@pytest.mark.skipif(not hasattr(os, "fork") or not os.path.isdir("/proc/self/task"),
+                    reason="needs fork, and Linux's /proc to count the child's threads")
+def test_a_forked_child_runs_the_core_on_its_own_workers():
+    """A child made by fork() has no threads but the one that forked: the core's kept workers
+    stay with the parent, and the child starts its own, with the same result."""
+    result = subprocess.run([sys.executable, "-c", FORKED], capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "child 0", (result.stdout, result.stderr)
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="needs two cores")
+def test_loops_one_after_another_run_on_the_same_kept_worker():
+    """The core keeps its worker between loops instead of starting a thread per loop. Each loop
+    has 40 chunks of 1 ms, so its worker takes some of them however late it wakes."""
+    from pointscale import _testing
+    helpers = []
+    for _ in range(3):
+        caller, numbers, _ = _testing.loop_threads(40, 1000, threads=2)
+        others = set(numbers) - {caller}
+        assert len(others) == 1, (caller, numbers)  # the caller and one worker shared the chunks
+        helpers.append(others.pop())
+    assert helpers[0] == helpers[1] == helpers[2], helpers
+
+
+def test_workers_round_as_the_calling_thread_does():
+    """A kept worker was started by an earlier call, in that call's floating-point environment;
+    it takes each loop's caller's for that loop (and a thread started for a loop does too)."""
+    from pointscale import _testing
+    _testing.loop_threads(40, 200, threads=2)  # the kept worker, started in the default mode
+    for threads in (2, 8):  # the kept worker; threads started for the loop
+        caller, numbers, upward = _testing.loop_threads(40, 200, threads=threads, upward=True)
+        assert all(upward), (threads, numbers, upward)
+        assert len(set(numbers)) > 1 or (os.cpu_count() or 1) < 2, numbers  # other threads took chunks
+        _, _, plain = _testing.loop_threads(40, 200, threads=threads)
+        assert not any(plain), plain

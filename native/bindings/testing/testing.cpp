@@ -2,13 +2,19 @@
 // module the package runs on. self_knn's rows are checked against a brute-force search, the
 // kd-tree's rows are what self_knn replaced (bench/knn_bench.py), normals can be oriented
 // with another graph width than the package's (tests/test_normals.py), and which parts an edit
-// mirrors can be asked directly (tests/test_mirrored_edits.py).
+// mirrors can be asked directly (tests/test_mirrored_edits.py), and which threads a parallel
+// loop's chunks ran on, in what rounding mode, can be seen (tests/test_threads.py).
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cfenv>
+#include <chrono>
 #include <cstddef>
+#include <thread>
 #include <vector>
 
 #include "../bindings.h"
@@ -42,10 +48,41 @@ py::tuple knn_rows(const DoubleArray& points, int k, int threads, const Fill& fi
   return py::make_tuple(nearest, d2);
 }
 
+// A number per thread that asks for one: the first thread to ask gets 1, the next 2, ...
+int thread_number() {
+  static std::atomic<int> next{1};
+  thread_local const int mine = next.fetch_add(1);
+  return mine;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_testing, m) {
   m.doc() = "The core's internals for tests and benchmarks; not part of pointscale's API.";
+
+  // (thread numbers, rounding modes) of the chunks of a parallel loop of `chunks` chunks, each
+  // busy for about `busy_us` microseconds, run with `threads` threads from a calling thread whose
+  // rounding is upward when `upward` (restored after). thread_number() of the caller comes
+  // first. The mode is 1 where a chunk rounded upward, 0 where it rounded to nearest.
+  m.def("loop_threads", [](int chunks, int busy_us, int threads, bool upward) {
+    if (chunks < 1 || busy_us < 0) throw py::value_error("chunks must be positive and busy_us not negative");
+    std::vector<int> number(static_cast<std::size_t>(chunks)), mode(static_cast<std::size_t>(chunks));
+    const int caller = without_gil(threads, [&] {
+      const int before = std::fegetround();
+      if (upward) std::fesetround(FE_UPWARD);
+      parallel_for(static_cast<std::size_t>(chunks), [&](std::size_t b, std::size_t e) {
+        for (std::size_t c = b; c < e; ++c) {
+          const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(busy_us);
+          while (std::chrono::steady_clock::now() < until) {}
+          number[c] = thread_number();
+          mode[c] = std::fegetround() == FE_UPWARD ? 1 : 0;
+        }
+      }, {}, 1);
+      std::fesetround(before);
+      return thread_number();
+    });
+    return py::make_tuple(caller, number, mode);
+  }, py::arg("chunks"), py::arg("busy_us"), py::arg("threads") = 0, py::arg("upward") = false);
 
   // Every point's k nearest among the points themselves (the rows decompose's kNN passes use).
   m.def("self_knn", [](const DoubleArray& points, int k, int threads) {

@@ -29,7 +29,8 @@ class ThreadCountScope {
 int thread_count();
 
 // Calls body(begin, end) on disjoint chunks covering [0, n). The calling thread works too and
-// reports progress to `stage` about every 50 ms. Exceptions (including Cancelled) are rethrown
+// reports progress to `stage` about every 50 ms. The other threads are kept workers
+// (worker_pool.h) when they are free, else threads started for this loop. Exceptions (including Cancelled) are rethrown
 // in the calling thread after all workers stopped. A worker thread that the system cannot start
 // stops and joins the ones that did start, then throws std::runtime_error (RuntimeError in Python).
 void parallel_for(std::size_t n, const std::function<void(std::size_t, std::size_t)>& body,
