@@ -18,13 +18,20 @@ def mesh_object_problem(obj) -> str | None:
     return None
 
 
-# session_uid of every object with a decompose in flight: other operators wait for it.
+# session_uid of every object with a decompose in flight, and of its mesh: other operators
+# wait for it, on that object and on every object that shares the mesh (a linked duplicate).
 running: set = set()
 
 
 def running_problem(obj) -> str | None:
-    if obj is not None and obj.session_uid in running:
+    if obj is None:
+        return None
+    if obj.session_uid in running:
         return f"'{obj.name}' is being decomposed (Esc cancels): wait for it to finish"
+    mesh = getattr(obj, "data", None)
+    if mesh is not None and mesh.session_uid in running:
+        return (f"the mesh of '{obj.name}' ('{mesh.name}', shared with another object) is being decomposed "
+                "(Esc cancels): wait for it to finish")
     return None
 
 

@@ -22,22 +22,22 @@ class RunsInBackground:
 
     _job = None
     _timer = None
-    _busy = None  # the session_uid of the object the job works on (state.running), or None
+    _busy = ()  # the session_uids the job works on (state.running)
     _what = ""
 
-    def start(self, context, compute, *, what: str, name: str, cancelled_type, busy=None) -> set:
+    def start(self, context, compute, *, what: str, name: str, cancelled_type, busy=()) -> set:
         """Runs ``compute(progress)`` in a worker thread; ``what`` names it in the status bar
-        ("decomposing 'Suzanne' (5000 vertices)"). busy: an object's session_uid, marked as
-        running (state.running) until the job ends, so that no other job starts on it."""
+        ("decomposing 'Suzanne' (5000 vertices)"). busy: session_uids (an object's and its
+        mesh's), marked as running (state.running) until the job ends, so that no other job
+        starts on them."""
         self._what = what
         self._job = Job(compute, cancelled_type=cancelled_type, name=name)
         wm = context.window_manager
         self._timer = wm.event_timer_add(preferences.get(context).poll_interval, window=context.window)
         wm.modal_handler_add(self)
         wm.progress_begin(0, 100)
-        self._busy = busy
-        if busy is not None:
-            state.running.add(busy)
+        self._busy = tuple(busy)
+        state.running.update(self._busy)
         self._job.start()
         self._status(context)
         return {"RUNNING_MODAL"}
@@ -57,7 +57,8 @@ class RunsInBackground:
         self._cleanup(context)
         # Blender keeps the finished operator (redo, the Info log): let it keep no arrays.
         self._job = None
-        if job.cancelled:
+        # Esc after the engine's last progress call still cancels: the artist asked for nothing.
+        if job.cancelled or job.cancelling:
             self.report({"WARNING"}, self.cancelled_report)
             return {"CANCELLED"}
         if job.error is not None:
@@ -82,9 +83,8 @@ class RunsInBackground:
             context.area.tag_redraw()
 
     def _cleanup(self, context):
-        if self._busy is not None:
-            state.running.discard(self._busy)
-            self._busy = None
+        state.running.difference_update(self._busy)
+        self._busy = ()
         wm = context.window_manager
         if self._timer is not None:
             wm.event_timer_remove(self._timer)

@@ -150,6 +150,22 @@ def _decompose_fitting_parts(ps, points, kwargs, progress):
     return layout, kwargs
 
 
+def _changed_meanwhile(context, obj, points, k) -> str | None:
+    """What the artist changed while the job ran that writing its result would lose or take
+    over (the UI stays live): the Basis it read, or a key, group or attribute now named as the
+    results are. None when nothing was."""
+    if obj.type != "MESH" or len(obj.data.vertices) != len(points):
+        return "the mesh changed while it was being decomposed"
+    if obj.mode == "EDIT":
+        obj.update_from_editmode()  # an edit in progress counts
+    mesh = obj.data
+    if not np.array_equal(mesh_io.read_basis(mesh), points):
+        return "its vertices moved while it was being decomposed (decompose again to use them)"
+    n_bands = mesh.multiscale.n_bands
+    return (keys.layout_problem(mesh, k, n_bands) or keys.groups_problem(obj, k, n_bands)
+            or storage.attributes_problem(mesh, k, preferences.get(context).normal_attributes))
+
+
 class POINTSCALE_OT_decompose(RunsInBackground, bpy.types.Operator):
     """Split the mesh into a smooth base and detail bands (Level and Band shape keys).
     The Basis is read, never modified; faces are kept but not used"""
@@ -233,7 +249,7 @@ class POINTSCALE_OT_decompose(RunsInBackground, bpy.types.Operator):
         ps = engine.get()
         return self.start(context, lambda progress: _computed(ps, points, kwargs, progress),
                           what=f"decomposing '{obj.name}' ({len(points)} vertices)", name="pointscale-decompose",
-                          cancelled_type=engine.cancelled_type(), busy=obj.session_uid)
+                          cancelled_type=engine.cancelled_type(), busy=(obj.session_uid, obj.data.session_uid))
 
     cancelled_report = "Decompose cancelled; the mesh is unchanged"
 
@@ -246,6 +262,10 @@ class POINTSCALE_OT_decompose(RunsInBackground, bpy.types.Operator):
         obj = next((o for o in bpy.data.objects if o.session_uid == self._obj_uid), None)
         if obj is None:
             self.report({"ERROR"}, f"'{self._obj_name}' disappeared while it was being decomposed")
+            return {"CANCELLED"}
+        problem = _changed_meanwhile(context, obj, points, result[0].k)
+        if problem:
+            self.report({"ERROR"}, f"Decompose '{obj.name}': {problem}; nothing was written")
             return {"CANCELLED"}
         return self._finish(context, obj, result, points)
 

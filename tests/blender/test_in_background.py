@@ -197,3 +197,72 @@ def test_esc_cancels_decompose_and_leaves_the_mesh_as_it_was(addon):
     assert driver.reports == [("WARNING", "Decompose cancelled; the mesh is unchanged")]
     assert obj.data.shape_keys is None and np.array_equal(h.vertices(obj.data), before)
     assert obj.session_uid not in addon.state.running
+
+
+def test_a_decompose_whose_vertices_moved_meanwhile_writes_nothing(addon):
+    """The UI stays live while the engine runs: a vertex the artist moved then would be lost
+    under keys built from the Basis as it was."""
+    obj = h.mesh_object(h.noisy_sphere(6000))
+    context = _Context()
+    driver = _driver(_decompose_class(addon))
+    driver.start_in_background(context)
+
+    def move_a_vertex():
+        obj.data.vertices[10].co.z += 0.05
+        obj.data.update()
+
+    assert _run(driver, context, before_end=move_a_vertex) == {"CANCELLED"}
+    moved = h.vertices(obj.data)[10]
+    kind, message = driver.reports[-1]
+    assert kind == "ERROR" and "moved while it was being decomposed" in message and "nothing was written" in message
+    assert obj.data.shape_keys is None and moved[2] == pytest.approx(h.noisy_sphere(6000)[10, 2] + 0.05, abs=1e-6)
+    assert obj.session_uid not in addon.state.running
+
+
+def test_a_key_named_as_a_result_meanwhile_is_not_taken_over(addon):
+    obj = h.mesh_object(h.noisy_sphere(6000))
+    context = _Context()
+    driver = _driver(_decompose_class(addon))
+    driver.start_in_background(context)
+    mine = np.full((6000, 3), 0.5)
+
+    def add_my_key():
+        obj.shape_key_add(name="Basis")
+        key = obj.shape_key_add(name="Level 1")
+        key.data.foreach_set("co", mine.astype(np.float32).ravel())
+
+    assert _run(driver, context, before_end=add_my_key) == {"CANCELLED"}
+    kind, message = driver.reports[-1]
+    assert kind == "ERROR" and "Level 1" in message and "nothing was written" in message, message
+    assert list(obj.data.shape_keys.key_blocks.keys()) == ["Basis", "Level 1"]
+    assert np.array_equal(h.key(obj.data, "Level 1"), mine)
+
+
+def test_a_linked_duplicate_waits_for_the_decompose_of_its_mesh(addon):
+    """Alt+D shares the mesh: a second Decompose (or Clear, or Rebuild) through the duplicate
+    would write the same keys as the job's."""
+    obj = h.mesh_object(h.noisy_sphere(6000))
+    twin = bpy.data.objects.new("Twin", obj.data)
+    bpy.context.scene.collection.objects.link(twin)
+    context = _Context()
+    driver = _driver(_decompose_class(addon))
+    driver.start_in_background(context)
+    problem = addon.state.running_problem(twin)
+    assert problem and "shared with another object" in problem and "being decomposed" in problem
+    bpy.context.view_layer.objects.active = twin
+    assert not bpy.ops.pointscale.decompose.poll()
+    assert _run(driver, context) == {"FINISHED"}
+    assert addon.state.running_problem(twin) is None and not addon.state.running
+    assert bpy.ops.pointscale.decompose.poll()
+
+
+def test_esc_after_the_engine_finished_still_cancels(addon):
+    """Esc that comes after the engine's last progress call, before the result is written:
+    the status bar said 'cancelling', so nothing is written."""
+    obj = h.mesh_object(h.noisy_sphere(6000))
+    context = _Context()
+    driver = _driver(_decompose_class(addon))
+    driver.start_in_background(context)
+    assert _run(driver, context, before_end=lambda: driver._job.cancel()) == {"CANCELLED"}
+    assert driver.reports == [("WARNING", "Decompose cancelled; the mesh is unchanged")]
+    assert obj.data.shape_keys is None and not addon.state.running
