@@ -51,7 +51,9 @@ def test_tall_handles_scaled_up_are_prevented_in_few_rounds(gains, reference):
     assert ps.find_folds(dec, prevented, fold_reference=reference).count == 0
     kept = folds.limiter == 1.0
     assert np.array_equal(prevented[kept], plain[kept])
-    assert folds.limiter[folds.before != 0].max() <= 0.5   # each fold keeps at most half its gain
+    # It limits no more points than it must: measured 12,876-12,906 of the 30,225 (with
+    # smoothing=3, a limiter reaching two ring steps further around each fold, 17,959-18,028).
+    assert folds.changed.sum() < 13500, folds.changed.sum()
 
 
 def test_a_fold_that_its_own_gain_cannot_undo_hands_it_on_in_its_third_round():

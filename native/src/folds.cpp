@@ -490,8 +490,9 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
   // member a share of its gain (about 1% on a sharp CAD edge), and on a ring with hardly any
   // plane that share keeps the fold. From its hand_on_round-th round of folding on, or once its
   // strength reaches that of the step's tenth round, such a point hands its strength on to its
-  // ring's members, which then limit like folds of their own (and, holding that strength, hand
-  // it on at once if they fold too).
+  // ring's members, which then limit like folds of their own (and hand it on in turn if they
+  // fold too: at once when it is the stubborn strength, else in their own hand_on_round-th
+  // round of folding).
   double stubborn = 0.0;  // the strength the step alone gives in a point's stubborn_rounds-th round of folding
   for (int k = 0; k < stubborn_rounds; ++k) stubborn = 1.0 - options.step * (1.0 - stubborn);
   ZeroedArray<std::uint8_t> times_folded(n);  // rounds each slot has folded in, up to 255

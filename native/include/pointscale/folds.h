@@ -120,7 +120,8 @@ struct FoldLimitReport {
 // (the strength of the step's tenth round), gives its strength to its ring's members too (the
 // averaging leaves them a share of their gain, which keeps a fold on a ring with hardly any
 // plane); they then count as folds of that strength, so around it the limiter reaches one ring
-// step further, and a member that folds as well hands the strength on at once (the folds are
+// step further, and a member that folds as well hands it on in turn (at once when it holds the
+// strength of the step's tenth round, else in its own third round of folding; the folds are
 // visited in point order each round, so the strengths handed on are the same on any number of
 // threads). Points farther than that from every fold are not written to: they keep their
 // result bit for bit.
