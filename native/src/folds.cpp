@@ -506,14 +506,14 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
     // Each fold's strength rises by the step, or at once as far as its ring says it must
     // (unfolding_share, with a margin: the ring's members keep a little more of their gain
     // than the fold itself), whichever is more: a fold far over takes one round, not ten.
-    const ZeroedArray<double>& limiter_now = layer.back();
+    const ZeroedArray<double>& lowered_now = layer.back();  // 1 - lambda, as the last round left it
     std::vector<double> guess(folds.size());
     parallel_for(folds.size(), [&](std::size_t b, std::size_t e) {
       for (std::size_t k = b; k < e; ++k) {
         const std::size_t f = static_cast<std::size_t>(folds[k]);
         const double share = unfolding_share(ref, ref.other_sheet[f], exempting ? ref.exempt[f] : 0, e_rows, r,
                                              folds[k]);
-        guess[k] = 1.0 - unfolding_margin * share * (1.0 - limiter_now[f]);
+        guess[k] = 1.0 - unfolding_margin * share * (1.0 - lowered_now[f]);
       }
     }, {}, 256);
     for (std::size_t k = 0; k < folds.size(); ++k) {
