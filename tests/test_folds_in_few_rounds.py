@@ -42,17 +42,19 @@ def test_a_point_pushed_far_past_its_neighbours_is_limited_in_one_round(sheet, e
 @pytest.mark.parametrize("gains", [(3, 3, 3), (1, 1, 6)])
 @pytest.mark.parametrize("reference", ["input", "base"])
 def test_tall_handles_scaled_up_are_prevented_in_few_rounds(gains, reference):
-    """About 5,000 of 30,225 points fold; halving took 6 to 10 rounds, now 3 or 4."""
+    """About 5,000 of 30,225 points fold; halving took 6 to 10 rounds, now 1 or 2 (3 or 4 while
+    the edges between its 448 coincident pairs were tested too)."""
     dec = ps.decompose(ps.shapes.handles_plane()[0], levels=4)
     plain = ps.reconstruct(dec, gains)
     prevented, folds = ps.reconstruct(dec, gains, folds="prevent", fold_reference=reference)
     assert folds.count_before > 4000 and folds.count == 0 and not folds.capped
-    assert folds.rounds <= 4, folds.rounds
+    assert folds.rounds <= 2, folds.rounds
     assert ps.find_folds(dec, prevented, fold_reference=reference).count == 0
     kept = folds.limiter == 1.0
     assert np.array_equal(prevented[kept], plain[kept])
-    # It limits no more points than it must: measured 12,876-12,906 of the 30,225 (with
-    # smoothing=3, a limiter reaching two ring steps further around each fold, 17,959-18,028).
+    # It limits no more points than it must: measured 12,856-12,904 of the 30,225 (with
+    # smoothing=3, a limiter reaching two ring steps further around each fold, 17,959-18,028
+    # before coincident points were left out).
     assert folds.changed.sum() < 13500, folds.changed.sum()
 
 

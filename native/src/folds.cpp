@@ -23,6 +23,31 @@ namespace {
 // an edge or a plane at right angles must not flip between them.
 constexpr double fold_rounding = 1e-9;
 
+// A ring edge this much shorter than the ring's longest, in the base or in the input, is left
+// out of both tests: points that coincide in the input (a mesh split along a seam, a scan's
+// duplicates) have no order along it to keep, and their base positions differ by a rounding
+// of how they were reached (1e-7 to 1e-5 of the spacing), which a result's rounding then turns
+// either way. Blender's keys, in float32, round at about 1e-7 of the model.
+constexpr double negligible_edge = 1e-4;
+
+// Members of slot t's ring (bits m) whose edge from t is negligible_edge of the longest in x
+// (#P by 3, by slot), among those skip leaves in.
+std::uint16_t negligible_edges(const IndexList& rings, int ring_size, const Points& x, std::size_t t, std::uint16_t skip) {
+  const Index* ring = rings.data() + t * static_cast<std::size_t>(ring_size);
+  const Eigen::RowVector3d xi = x.row(static_cast<Eigen::Index>(t));
+  double longest = 0.0;
+  double length[16];
+  for (int m = 1; m < ring_size; ++m) {
+    length[m] = (x.row(ring[m]) - xi).squaredNorm();
+    if (!((skip >> m) & 1u)) longest = std::max(longest, length[m]);
+  }
+  std::uint16_t bits = 0;
+  for (int m = 1; m < ring_size; ++m)
+    if (!((skip >> m) & 1u) && length[m] <= negligible_edge * negligible_edge * longest)
+      bits |= static_cast<std::uint16_t>(1u << m);
+  return bits;
+}
+
 // a . b < -fold_rounding |a| |b|, without the square roots.
 inline bool reversed(const Vec3& a, const Vec3& b) {
   const double d = a.dot(b);
@@ -263,6 +288,8 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input) 
       for (std::size_t m = 1; m < width; ++m)
         if (ring[m] == ring[0] || ref.normals.row(ring[m]).dot(ref.normals.row(row)) <= 0.0)
           skip |= static_cast<std::uint16_t>(1u << m);
+      skip |= negligible_edges(ref.rings, ref.ring_size, ref.base, t, skip);
+      if (input) skip |= negligible_edges(ref.rings, ref.ring_size, input_by_slot, t, skip);
       if (ring_on_a_line(ref, skip, static_cast<Index>(t))) skip |= 1u;
       ref.other_sheet[t] = skip;
       ref.base_planes.row(static_cast<Eigen::Index>(t)) = ring_plane(ref, skip, by_slot(ref.base), static_cast<Index>(t)).transpose();

@@ -34,6 +34,7 @@ struct FoldReference {
   Points base_planes;                      // #P by 3, by slot: the stored base's ring plane, M_b0 x M_b1 of
                                            // find_folds with the stored base (no edit), as find_folds sums it
   std::vector<std::uint16_t> other_sheet;  // #P, by slot: members whose stored base normal faces away (n_i . n_j <= 0),
+                                           // or whose edge is under 1e-4 of the ring's longest in the base or the input,
                                            // and bit 0 where the stored ring lies on a line (no plane test)
   std::vector<std::uint16_t> exempt;       // #P, by slot: edges (bit m) and planes (bit 0) that already fold in
                                            // the input, or empty: every fold counts
@@ -58,6 +59,10 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input);
 //    edge (i, j). M_x (sum u u^T)^-1 is the least-squares Jacobian of the map from the
 //    stored base to x on the ring; the inverse only scales the cross product by a positive
 //    number, so the sign is read without it.
+// An edge under 1e-4 of its ring's longest, in the stored base or in the input, takes neither
+// test: points that coincide in the input (a mesh split along a seam, a scan's duplicates) have
+// no order along it, and their base positions differ only by rounding, which a result's own
+// rounding turns either way.
 // A ring that spreads along one line only (a strip of duplicated or collinear scan points, its
 // tangent spread across the line under 1e-3 of that along it) has no plane: it takes only the
 // crossing test.
