@@ -15,6 +15,15 @@ def mesh_object_problem(obj) -> str | None:
         return f"'{obj.name}' is {article} {kind}, not a mesh: multiscale editing works on mesh objects"
     if obj.library is not None or obj.data.library is not None:
         return f"'{obj.name}' is linked from a library and cannot be edited"
+    if obj.data.is_editmode and obj.mode != "EDIT":
+        # A linked duplicate in Edit Mode holds the mesh: its vertices and attributes are in the
+        # edit, not in the mesh, until it leaves (writing them now fails half way).
+        import bpy
+
+        holders = [o.name for o in bpy.data.objects if o.data == obj.data and o.mode == "EDIT"]
+        through = f" through '{holders[0]}'" if holders else ""
+        return (f"the mesh of '{obj.name}' ('{obj.data.name}') is in Edit Mode{through}: leave Edit Mode there "
+                "first")
     return None
 
 
