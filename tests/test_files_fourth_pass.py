@@ -276,10 +276,12 @@ def test_row_and_column_indices_are_kept_and_written_back(tmp_path):
     expected = np.tile(np.arange(300) // 20, 2)
     assert np.array_equal(scan.vertex_attributes["rowIndex"], expected)
     assert np.array_equal(scan.vertex_attributes["columnIndex"], np.tile(np.arange(300) % 20, 2))
-    with pytest.warns(UserWarning, match="scan_id not written"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # scan_id is written too, as the scans (test_files_fifth_pass.py)
         io.write(tmp_path / "back.e57", scan)
     back = io.read(tmp_path / "back.e57")
     assert np.array_equal(back.vertex_attributes["rowIndex"], expected)
+    assert np.array_equal(back.vertex_attributes["scan_id"], scan.vertex_attributes["scan_id"])
 
 
 # -- 4: XYZ colour columns named in a header -------------------------------------------------------

@@ -7,12 +7,14 @@ from. Every point field pye57 reads is kept: intensity (float64), colours (color
 as red, green, blue uint8) and a structured scan's rowIndex and columnIndex (uint16). A field
 that only some scans have is kept for all, filled with 0 in the scans without it, and a warning
 names the field and those scans.
-Written: one scan with intensity, colours, and rowIndex/columnIndex when the scan has both.
+Written: intensity, colours, and rowIndex/columnIndex when the scan has both; one E57 scan per
+scan_id (several scans read, or a PTS file's blocks), each with the name and pose it was read
+with (format_info["stations"]), else named "Scan k" and placed at its centre.
 pye57 writes colours as 0..255: 8-bit values are written as they are, also from 16-bit fields
 when every value is at most 255 (as many photogrammetry exporters store them in LAS); 16-bit
 colours are scaled to 8 bits with a warning. Coordinates are float32 in pye57, so they are
-written relative to the bounding-box centre, which becomes the scan's pose translation (error
-about 1e-7 of the extent, however far the scan is from the origin). Other attributes and normals
+written in the station's own frame, or relative to the bounding-box centre, which becomes the
+scan's pose translation (error about 1e-7 of the extent, however far the scan is from the origin). Other attributes and normals
 are dropped with a warning. Spherical-coordinate scans are read through pye57's
 conversion when it offers one, else refused.
 """
@@ -59,6 +61,7 @@ def read_e57(path) -> Scan:
                                    ignore_missing_fields=True)
                      for i in range(e57.scan_count)]
             unread = sorted({f for i in range(e57.scan_count) for f in e57.get_header(i).point_fields} - _READ)
+            stations = [_station(e57.get_header(i), i) for i in range(e57.scan_count)]
         finally:
             e57.close()
     except Exception as exc:  # libE57 raises E57Exception on damaged files
@@ -79,7 +82,22 @@ def read_e57(path) -> Scan:
     if len(scans) > 1:
         attributes["scan_id"] = np.repeat(np.arange(len(scans), dtype=np.uint16), [len(s["cartesianX"]) for s in scans])
     return Scan(points=points, precision=np.float64, vertex_attributes=attributes,
-                format_info={"format": "e57", "scans": len(scans)})
+                format_info={"format": "e57", "scans": len(scans), "stations": stations})
+
+
+def _station(header, index: int) -> dict:
+    """A scan's name and pose (rotation quaternion w x y z, translation), as write_e57 puts them
+    back; a scan without a pose gets the identity."""
+    try:
+        name = str(header["name"].value())
+    except Exception:  # an unnamed scan
+        name = f"Scan {index}"
+    rotation, translation = [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0]
+    if header.has_pose():
+        rotation = [float(v) for v in np.asarray(header.rotation, dtype=np.float64).ravel()]
+        translation = [float(v) for v in np.asarray(header.translation, dtype=np.float64).ravel()]
+    return {"name": name.splitlines()[0] if name.strip() else f"Scan {index}", "rotation": rotation,
+            "translation": translation}
 
 
 def _fields_of_every_scan(path: str, scans: list) -> dict:
@@ -106,41 +124,93 @@ def _fields_of_every_scan(path: str, scans: list) -> dict:
 def write_e57(path, scan: Scan) -> None:
     path = os.fspath(path)
     pye57 = _pye57("writing")
-    # pye57 stores coordinates as float32: store them around the bounding-box centre and put the
-    # centre in the scan's pose, so that coordinates far from the origin keep their precision.
-    centre = (scan.points.min(axis=0) + scan.points.max(axis=0)) / 2
-    local = scan.points - centre
-    _warn_if_single_precision_loses(path, local)
-    data = {"cartesianX": local[:, 0].copy(), "cartesianY": local[:, 1].copy(), "cartesianZ": local[:, 2].copy()}
-    kept = set()
-    if "intensity" in scan.vertex_attributes:
-        data["intensity"] = np.asarray(scan.vertex_attributes["intensity"], dtype=np.float64)
-        kept.add("intensity")
-    if all(name in scan.vertex_attributes for _, name in _COLOURS):
-        colours, loss = eight_bit_colours({name: scan.vertex_attributes[name] for _, name in _COLOURS}, path)
-        for field, name in _COLOURS:
-            data[field] = colours[name]
-        kept |= {name for _, name in _COLOURS}
-        if loss:
-            warnings.warn(f"{path}: E57 (as pye57 writes it) holds 8-bit colours: {loss}", stacklevel=3)
-    if _grid_fits(scan):  # a structured scan's row and column, which pye57 stores as uint16
-        for name in _GRID:
-            data[name] = np.asarray(scan.vertex_attributes[name]).astype(np.uint16)
-        kept |= set(_GRID)
+    fields, kept = _point_fields(path, scan)
+    stations = _stations_to_write(scan)
+    if stations is not None:
+        kept.add("scan_id")
     dropped = [n for n in scan.vertex_attributes if n not in kept] + (["normals"] if scan.normals is not None else [])
     if dropped:
-        warnings.warn(f"{path}: E57 writing keeps intensity, colours, rowIndex and columnIndex only; "
-                      f"{', '.join(dropped)} not written", stacklevel=3)
+        warnings.warn(f"{path}: E57 writing keeps intensity, colours, rowIndex, columnIndex and the scans (scan_id) "
+                      f"only; {', '.join(dropped)} not written", stacklevel=3)
+    if stations is None:
+        stations = [(np.arange(scan.n_points), None)]
     with atomic_write(path) as temporary:
         os.unlink(temporary)  # libE57 refuses to open an existing file for writing
         try:
             e57 = pye57.E57(str(temporary), mode="w")
             try:
-                e57.write_scan_raw(data, rotation=np.array([1.0, 0, 0, 0]), translation=centre)
+                for which, station in stations:
+                    data, rotation, translation = _scan_in_its_frame(path, scan.points[which], station)
+                    data.update({name: values[which] for name, values in fields.items()})
+                    e57.write_scan_raw(data, name=station["name"] if station else None, rotation=rotation,
+                                       translation=translation)
             finally:
                 e57.close()
         except Exception as exc:
             raise ValueError(f"{path}: cannot write E57 ({type(exc).__name__}: {_first_line(exc)})") from None
+
+
+def _point_fields(path: str, scan: Scan):
+    """(E57 field name -> values of every point, the attributes they keep)."""
+    fields, kept = {}, set()
+    if "intensity" in scan.vertex_attributes:
+        fields["intensity"] = np.asarray(scan.vertex_attributes["intensity"], dtype=np.float64)
+        kept.add("intensity")
+    if all(name in scan.vertex_attributes for _, name in _COLOURS):
+        colours, loss = eight_bit_colours({name: scan.vertex_attributes[name] for _, name in _COLOURS}, path)
+        for field, name in _COLOURS:
+            fields[field] = colours[name]
+        kept |= {name for _, name in _COLOURS}
+        if loss:
+            warnings.warn(f"{path}: E57 (as pye57 writes it) holds 8-bit colours: {loss}", stacklevel=4)
+    if _grid_fits(scan):  # a structured scan's row and column, which pye57 stores as uint16
+        for name in _GRID:
+            fields[name] = np.asarray(scan.vertex_attributes[name]).astype(np.uint16)
+        kept |= set(_GRID)
+    return fields, kept
+
+
+def _stations_to_write(scan: Scan):
+    """[(point indices, station or None)] for a scan read from several E57 scans (or PTS
+    blocks): one scan each, by scan_id, with the name and pose it was read with when the file
+    had them; None for a single scan."""
+    ids = scan.vertex_attributes.get("scan_id")
+    if ids is None or np.asarray(ids).ndim != 1 or np.asarray(ids).dtype.kind not in "iu":
+        return None
+    ids = np.asarray(ids)
+    values = np.unique(ids)
+    read = scan.format_info.get("stations") if scan.format_info.get("format") == "e57" else None
+    known = isinstance(read, list) and len(read) == len(values) and np.array_equal(values, np.arange(len(values)))
+    out = []
+    for v in values:
+        station = read[int(v)] if known else {"name": f"Scan {int(v)}", "rotation": None, "translation": None}
+        out.append((np.flatnonzero(ids == v), station))
+    return out
+
+
+def _scan_in_its_frame(path: str, points: np.ndarray, station):
+    """(coordinate fields, rotation, translation): the points in the station's own frame when
+    it has a pose, else around their bounding-box centre with that centre as the pose. pye57
+    stores coordinates as float32, so either keeps coordinates far from the origin precise."""
+    if station is not None and station.get("rotation") is not None:
+        rotation = np.asarray(station["rotation"], dtype=np.float64)
+        translation = np.asarray(station["translation"], dtype=np.float64)
+        local = (points - translation) @ _rotation_matrix(rotation)  # R^T (p - t), row by row
+    else:
+        translation = (points.min(axis=0) + points.max(axis=0)) / 2
+        rotation = np.array([1.0, 0, 0, 0])
+        local = points - translation
+    _warn_if_single_precision_loses(path, local)
+    data = {"cartesianX": local[:, 0].copy(), "cartesianY": local[:, 1].copy(), "cartesianZ": local[:, 2].copy()}
+    return data, rotation, translation
+
+
+def _rotation_matrix(q: np.ndarray) -> np.ndarray:
+    """The rotation of the unit quaternion w x y z (E57's pose)."""
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
 def _warn_if_single_precision_loses(path, local: np.ndarray) -> None:

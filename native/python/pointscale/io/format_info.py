@@ -36,6 +36,9 @@ def check_format_info(info: dict, n_points: int) -> None:
         _check_ply(info, n_points)
     elif kind in ("las", "laz"):
         _check_las(info)
+    elif kind == "e57":
+        _check(info, "stations", lambda v: _list_of(v, dict) and all(map(_station, v)),
+               "a list of scans (a name of one line, a rotation of 4 numbers not all 0, a translation of 3)")
 
 
 def _check_ply(info: dict, n_points: int) -> None:
@@ -124,3 +127,11 @@ def _vlr(v: dict) -> bool:
     return (isinstance(v.get("user_id"), str) and len(v["user_id"].encode("utf-8", "replace")) <= 16
             and _integer(v.get("record_id"), 0, 65535) and isinstance(v.get("description", ""), str)
             and len(v.get("description", "").encode("utf-8", "replace")) <= 32 and isinstance(v.get("data"), bytes))
+
+
+def _station(v: dict) -> bool:
+    # An E57 scan's name and pose (io/e57.py): the writer puts the points back in this frame.
+    name = v.get("name")
+    rotation = v.get("rotation")
+    return (isinstance(name, str) and bool(name) and "\n" not in name and "\r" not in name
+            and _numbers(rotation, 4) and any(r != 0 for r in rotation) and _numbers(v.get("translation"), 3))

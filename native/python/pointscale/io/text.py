@@ -6,7 +6,8 @@
       name every column, starting with x y z), columns 4-6 are normals when every row of them has unit length, and other
       columns are kept as float64 attributes column_3, column_4, ... Columns declared as 64-bit
       integers (id:u8, id:i8) are read and written exactly, not through float64; a header that
-      names a column twice is refused. Only float (or undeclared) nx ny nz are normals.
+      names a column twice is refused. Only float (or undeclared) nx ny nz are normals, wherever
+      the header puts them (CloudCompare puts them last); they are written as columns 4-6.
       Colours: three columns the header names R G B or red green blue (any case), holding whole
       numbers within 0..255 (or 0..65535), become the attributes red, green, blue as uint8 (or
       uint16), as the PLY and LAS readers give them, so that every writer writes them as colours
@@ -43,6 +44,8 @@ def read_xyz(path) -> Scan:
     if names_given:
         names, dtypes = _parse_header(header, rows.shape[1], path)
     else:  # no header, or a first comment that does not name the columns
+        if header is not None:
+            _warn_if_header_unread(path, header, rows.shape[1])
         names, dtypes = _guess_xyz_columns(rows)
     exact = _wide_integer_columns(path, names, dtypes) if names_given else {}
     declared = _declared_columns(header, rows.shape[1]) if names_given else set()
@@ -87,7 +90,7 @@ def _name_colour_columns(names: list, dtypes: list, rows: np.ndarray, declared: 
 
 def _declared_columns(header: str, ncols: int) -> set:
     """The columns whose dtype the header gives (name:dtype)."""
-    return {i for i, token in enumerate(header.replace(",", " ").split()[:ncols]) if ":" in token}
+    return {i for i, token in enumerate(_header_tokens(header, ncols) or []) if ":" in token}
 
 
 def _undeclared_wide_integers(path: str, rows: np.ndarray, names: list, declared: set, skip: int) -> dict:
@@ -259,16 +262,45 @@ def _load(path: str, skip_first: bool):
     return header, rows
 
 
-def _names_columns(header: str, ncols: int) -> bool:
-    """Whether a first comment line names the columns: as many words as columns, from x y z."""
+def _header_tokens(header: str, ncols: int) -> list | None:
+    """The names a first comment line gives the columns, or None: its words (split at spaces
+    and commas), or, when those are too many and commas part them into as many as the columns
+    (CloudCompare's "//X,Y,Z,R,G,B,GPS Time"), the comma-parted names, spaces as "_"."""
     tokens = header.replace(",", " ").split()
-    return len(tokens) == ncols and [t.partition(":")[0].lower() for t in tokens[:3]] == ["x", "y", "z"]
+    if len(tokens) == ncols:
+        return tokens
+    if "," in header:
+        parted = [t.strip().replace(" ", "_") for t in header.split(",")]
+        if len(parted) == ncols and all(parted):
+            return parted
+    return None
+
+
+def _starts_with_xyz(tokens: list) -> bool:
+    return [t.partition(":")[0].lower() for t in tokens[:3]] == ["x", "y", "z"]
+
+
+def _names_columns(header: str, ncols: int) -> bool:
+    """Whether a first comment line names the columns: as many names as columns, from x y z."""
+    tokens = _header_tokens(header, ncols)
+    return tokens is not None and _starts_with_xyz(tokens)
+
+
+def _warn_if_header_unread(path: str, header: str, ncols: int) -> None:
+    """A first line that starts x y z but names more or fewer columns than the rows have (a
+    name with a space in it, "GPS Time") names none of them: say so, not drop the names."""
+    words = header.replace(",", " ").split()
+    if _starts_with_xyz(words):
+        warnings.warn(f"{path}: the first line names {len(words)} columns but the rows have {ncols}, so its names "
+                      f"are not used (columns after z are read as column_3 ... and no colours): a column name "
+                      f"with a space in it? Write it without spaces, or part the names with commas", stacklevel=3)
 
 
 def _parse_header(header: str, ncols: int, path: str):
-    tokens = header.replace(",", " ").split()
-    if len(tokens) != ncols:
-        raise ValueError(f"{path}: the header names {len(tokens)} columns, the rows have {ncols}")
+    tokens = _header_tokens(header, ncols)
+    if tokens is None:
+        raise ValueError(f"{path}: the header names {len(header.replace(',', ' ').split())} columns, the rows have "
+                         f"{ncols}")
     names, dtypes = [], []
     for token in tokens:
         name, _, dtype = token.partition(":")
@@ -337,11 +369,13 @@ def _scan(path, rows, names, dtypes, info, exact: dict | None = None) -> Scan:
     points = rows[:, :3]
     if not np.isfinite(points).all():
         raise ValueError(f"{path}: {int((~np.isfinite(points).all(axis=1)).sum())} points have non-finite coordinates")
-    # Columns 4-6 are the normals when named nx ny nz and declared float (or not declared);
-    # integer ones (quantised normals) are the user's data, kept as attributes.
+    # The columns named nx ny nz are the normals when declared float (or not declared), wherever
+    # they stand (CloudCompare writes them after the colours and scalar fields); integer ones
+    # (quantised normals) are the user's data, kept as attributes.
     normals = None
-    if names[3:6] == ["nx", "ny", "nz"] and all(np.dtype(d).kind == "f" for d in dtypes[3:6]):
-        normals = rows[:, 3:6]
+    where = [names.index(n) if n in names else -1 for n in ("nx", "ny", "nz")]
+    if min(where) >= 3 and all(np.dtype(dtypes[i]).kind == "f" for i in where):
+        normals = rows[:, where]
     attributes = {}
     for i, (name, dtype) in enumerate(zip(names, dtypes)):
         if name in ("x", "y", "z") or (normals is not None and name in ("nx", "ny", "nz")):

@@ -1,0 +1,129 @@
+"""Files, after a fifth reader's pass (trial, 2026-12-07): CloudCompare's XYZ with normals after
+the colours, a header whose column name holds a space, and E57 files of several stations."""
+import warnings
+
+import numpy as np
+import pytest
+
+import pointscale as ps
+from pointscale import io
+
+
+def _plane(n, seed=0):
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(0, 10, (n, 2))
+    return np.c_[xy, 0.3 * np.sin(xy[:, 0]) + 0.1 * np.cos(1.7 * xy[:, 1])]
+
+
+@pytest.mark.parametrize("order", [("rgb", "normals"), ("normals", "rgb"), ("rgb", "sf", "normals")])
+def test_xyz_normals_are_read_wherever_the_header_puts_them(tmp_path, order):
+    """CloudCompare writes normals after the colours and scalar fields: they were read as plain
+    attributes nx ny nz, and decompose estimated its own normals (facing +z where the file's
+    faced -z)."""
+    points = _plane(1500)
+    down = np.tile([0.0, 0.0, -1.0], (len(points), 1))
+    rgb = np.random.default_rng(1).integers(0, 256, (len(points), 3))
+    sf = np.arange(len(points)) * 0.5
+    blocks = {"rgb": (rgb, "R G B"), "normals": (down, "Nx Ny Nz"), "sf": (sf[:, None], "Intensity")}
+    path = tmp_path / "cloud.xyz"
+    np.savetxt(path, np.c_[(points,) + tuple(blocks[b][0] for b in order)], fmt="%.6f",
+               header="X Y Z " + " ".join(blocks[b][1] for b in order), comments="//")
+    scan = io.read(path)
+    assert scan.normals is not None and np.array_equal(scan.normals, down)
+    assert not {"nx", "ny", "nz"} & set(scan.vertex_attributes)
+    assert [scan.vertex_attributes[c].dtype for c in ("red", "green", "blue")] == [np.uint8] * 3
+    dec = ps.decompose(scan.points, levels=3, normals=scan.normals)
+    assert (dec.normals(0)[:, 2] < 0).all()  # the file's side, as with the normals first
+
+
+def test_a_header_with_a_name_holding_a_space_is_said_to_be_unused(tmp_path):
+    """'//X Y Z R G B GPS Time' names 8 columns for 7: every name was dropped, silently."""
+    points = _plane(500)
+    rgb = np.random.default_rng(2).integers(0, 256, (len(points), 3))
+    path = tmp_path / "spaced.xyz"
+    np.savetxt(path, np.c_[points, rgb, 3e8 + np.arange(len(points))], fmt="%.6f",
+               header="X Y Z R G B GPS Time", comments="//")
+    with pytest.warns(UserWarning, match="names 8 columns but the rows have 7.*a column name with a space"):
+        io.read(path)
+
+
+def test_comma_parted_names_may_hold_spaces(tmp_path):
+    points = _plane(500)
+    rgb = np.random.default_rng(3).integers(0, 256, (len(points), 3))
+    path = tmp_path / "commas.xyz"
+    np.savetxt(path, np.c_[points, rgb, 3e8 + np.arange(len(points))], fmt="%.6f",
+               header="X,Y,Z,R,G,B,GPS Time", comments="//")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scan = io.read(path)
+    assert set(scan.vertex_attributes) == {"red", "green", "blue", "GPS_Time"}
+    assert scan.vertex_attributes["red"].dtype == np.uint8
+
+
+def _quaternion(axis, degrees):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    half = np.radians(degrees) / 2
+    return np.r_[np.cos(half), np.sin(half) * axis]
+
+
+STATIONS = [("north", _quaternion([0, 0, 1], 30.0), [500000.0, 4000000.0, 100.0]),
+            ("south", _quaternion([1, 2, 3], 75.0), [500040.0, 3999990.0, 102.5]),
+            ("roof", [1.0, 0.0, 0.0, 0.0], [500020.0, 4000020.0, 130.0])]
+
+
+def _stations_file(path, pye57, sizes):
+    rng = np.random.default_rng(4)
+    e57 = pye57.E57(str(path), mode="w")
+    local = []
+    for (name, rotation, translation), n in zip(STATIONS, sizes):
+        q = _plane(n, seed=len(local)) - 5.0
+        local.append(q)
+        e57.write_scan_raw({"cartesianX": q[:, 0], "cartesianY": q[:, 1], "cartesianZ": q[:, 2],
+                            "intensity": rng.random(n), "rowIndex": np.arange(n) // 40,
+                            "columnIndex": np.arange(n) % 40},
+                           name=name, rotation=np.asarray(rotation, float), translation=np.asarray(translation))
+    e57.close()
+    return local
+
+
+def test_an_e57_of_several_stations_is_written_back_station_by_station(tmp_path):
+    """Three stations came back as one scan: names and poses gone, and their row and column
+    indices on top of each other (one grid cell for two or three points)."""
+    pye57 = pytest.importorskip("pye57")
+    sizes = (1200, 900, 700)
+    local = _stations_file(tmp_path / "stations.e57", pye57, sizes)
+    scan = io.read(tmp_path / "stations.e57")
+    assert scan.n_points == sum(sizes)
+    # A filter's output: the world points moved a little, written as E57 again.
+    moved = scan.with_geometry(scan.points + [0.0, 0.0, 0.01])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # scan_id is written, as the scans
+        io.write(tmp_path / "out.e57", moved)
+    e57 = pye57.E57(str(tmp_path / "out.e57"))
+    assert e57.scan_count == 3
+    for i, ((name, rotation, translation), q) in enumerate(zip(STATIONS, local)):
+        header = e57.get_header(i)
+        raw = e57.read_scan_raw(i)
+        assert header["name"].value() == name
+        assert np.allclose(header.translation, translation) and np.allclose(header.rotation, rotation)
+        # In the station's own frame, as before (moved 0.01 along world z), to float32.
+        got = np.c_[raw["cartesianX"], raw["cartesianY"], raw["cartesianZ"]]
+        up = np.asarray(header.rotation_matrix).T @ [0.0, 0.0, 0.01]
+        assert np.abs(got - (q + up)).max() < 1e-5
+        assert len(np.unique(np.c_[raw["rowIndex"], raw["columnIndex"]], axis=0)) == len(q)
+    e57.close()
+    again = io.read(tmp_path / "out.e57")
+    assert np.abs(again.points - moved.points).max() < 1e-5
+    assert np.array_equal(again.vertex_attributes["scan_id"], scan.vertex_attributes["scan_id"])
+
+
+def test_an_edited_station_pose_in_a_shared_folder_is_refused(tmp_path):
+    """The writer puts the points back in each station's frame: a pose a shared folder's
+    source.npz was edited to hold is checked before any writer uses it."""
+    pytest.importorskip("pye57")
+    from pointscale.io.format_info import check_format_info
+    for bad in ({"name": "a", "rotation": [0, 0, 0, 0], "translation": [0, 0, 0]},
+                {"name": "a\nb", "rotation": [1, 0, 0, 0], "translation": [0, 0, 0]},
+                {"name": "a", "rotation": [1, 0, 0, 0], "translation": [0, float("nan"), 0]}):
+        with pytest.raises(ValueError, match="stations must be a list of scans"):
+            check_format_info({"format": "e57", "stations": [bad]}, 10)
