@@ -38,8 +38,15 @@ def decompose_kwargs(levels=4, decimation=0.25, kernel=1.0, neighbors=24, thread
     """Keyword arguments for :func:`decompose` from the panel's settings."""
     if smoother not in SMOOTHERS or encoding not in ENCODINGS:
         raise ValueError(f"unknown smoother {smoother!r} or encoding {encoding!r}")
-    return dict(levels=int(levels), decimation=float(decimation), kernel=float(kernel),
+    return dict(levels=int(levels), decimation=as_typed(decimation), kernel=as_typed(kernel),
                 neighbors=int(neighbors), threads=int(threads), smoother=smoother, encoding=encoding)
+
+
+def as_typed(value: float) -> float:
+    """A float property's value as the artist typed it: Blender keeps 0.3 as float32
+    0.30000001192092896, which the engine's messages would print; the shortest decimal that
+    float32 reads back as the same value (0.3) is what was typed."""
+    return float(str(np.float32(value)))
 
 
 def run_decompose(ps, points: np.ndarray, smoother="MLS", encoding="PROJECTION", **kwargs):

@@ -238,7 +238,7 @@ def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int, base_fi
             kb.vertex_group = mask.name if mask is not None and mask.name in groups else ""
     for name in sorted(mine - set(layout) - set(RESULTS)):
         remove_key(obj, name)
-    kept += [name for name in (EDIT, FILTER) if keep_as_previous(obj, name, mine)]
+    kept += [name + PREVIOUS for name in (EDIT, FILTER) if keep_as_previous(obj, name, mine)]
     # The "(previous)" keys stay the add-on's: the next Decompose replaces them, Clear keeps them.
     mesh[OWNED] = layout + [name for name in KEPT if get(mesh, name) is not None and (name in mine or name in kept)]
     set_owned_groups(mesh, groups)

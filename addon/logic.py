@@ -417,6 +417,9 @@ def morph_message(message: str, a_name: str, b_name: str, base_name: str | None 
     found = MORPH_TOO_FEW.match(message)
     if found is not None:
         return f"{which[found.group(1)]} has {found.group(2)} vertices; Morph needs at least {found.group(3)}"
+    empty = re.match(r"^(points_a|points_b|base_points) is empty", message)
+    if empty is not None:
+        return f"{which[empty.group(1)]} has no vertices" + message[empty.end():]
     # Any other refusal names the keyword too ("all points_b are identical: they define no surface").
     return re.sub(r"\b(points_a|points_b|base_points)\b", lambda m: f"the vertices of {which[m.group(1)]}", message)
 

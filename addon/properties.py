@@ -117,7 +117,7 @@ class MULTISCALE_PG_settings(bpy.types.PropertyGroup):
         name="Use Mirror Modifier",
         description="When the mesh has a Mirror modifier, decompose the half together with its reflection, so "
         "that the seam stays on the mirror plane and merged at every level and gain (axes, mirror object, "
-        "merge distance and clipping are read from the first Mirror modifier)",
+        "merge distance and clipping are read from every Mirror modifier, stacked ones combined)",
         default=True,
     )
     thin_sheets: BoolProperty(

@@ -63,8 +63,8 @@ def loads(text: str) -> dict:
 def problem(recipe: dict, points, edges=None) -> str | None:
     """Why the mesh no longer gives the decomposition back: a changed Basis or edges."""
     if fingerprint(np.asarray(points, dtype=np.float32)) != recipe["points"]:
-        return ("its Basis changed since it was decomposed, and the decomposition is rebuilt from the Basis "
-                "after a reload")
+        return ("its Basis changed since it was decomposed (an edit of the mesh itself, or an applied transform), "
+                "and the stored decomposition belongs to the Basis as it was")
     if "edges" in recipe and (edges is None or fingerprint(np.asarray(edges, dtype=np.int32)) != recipe["edges"]):
         return "its edges changed since it was decomposed (Keep Parts Apart reads them)"
     return None

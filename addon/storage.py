@@ -228,7 +228,7 @@ def basis_problem(mesh) -> str | None:
         return None
     recipe = recipes.loads(mesh[PROP]["recipe"])
     problem = recipes.problem({"points": recipe["points"]}, mesh_io.read_basis(mesh))  # the Basis alone
-    return f"'{mesh.name}': {problem}. {AGAIN}" if problem else None
+    return f"the mesh '{mesh.name}': {problem}. {AGAIN}" if problem else None
 
 
 def _decompose_again(mesh, engine, recipe: dict, threads: int):

@@ -155,6 +155,8 @@ def test_every_morph_refusal_names_the_object_not_the_keyword(logic):
     said = logic.morph_message("points_a has 3 points; at least 8 are needed", "Head", "Skull")
     assert said == "object A 'Head' has 3 vertices; Morph needs at least 8"
     assert logic.morph_message("A and B barely overlap", "Head", "Skull") == "A and B barely overlap"
+    # An empty object: 'the vertices of object A 'Empty' is empty' before.
+    assert logic.morph_message("points_a is empty", "Empty", "Skull") == "object A 'Empty' has no vertices"
 
 
 def test_a_decompose_with_more_levels_puts_its_new_keys_beside_their_kin(logic):

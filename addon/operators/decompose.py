@@ -36,6 +36,9 @@ def _mirror_planes(obj, points):
     for modifier in modifiers:
         to_mirror_space = None
         if modifier.mirror_object is not None:
+            if abs(modifier.mirror_object.matrix_world.to_3x3().determinant()) < 1e-12:
+                raise ValueError(f"the Mirror Object '{modifier.mirror_object.name}' of modifier '{modifier.name}' has a "
+                                 "zero scale, so it has no mirror plane: give it a scale on every axis")
             # Blender mirrors in the mirror object's space: the mesh's coordinates -> world -> its.
             to_mirror_space = np.array(modifier.mirror_object.matrix_world.inverted() @ obj.matrix_world)
         bisects = any(b and a for b, a in zip(modifier.use_bisect_axis, modifier.use_axis))
@@ -101,6 +104,13 @@ def _prepare(op, context):
         # Normals orient level 0 (and tell the sides of thin sheets): an imported point cloud's
         # own, else, for thin sheets, the faces' vertex normals.
         normals = mesh_io.read_imported_normals(mesh)
+        if normals is not None:
+            unusable = int((~np.isfinite(normals).all(axis=1) | (np.abs(normals).max(axis=1) == 0)).sum())
+            if unusable:
+                raise ValueError(f"its point attribute 'normal' (read as the vertices' normals, as Blender's PLY "
+                                 f"importer gives a point cloud its file's) has {unusable} of {len(normals)} vectors "
+                                 "zero or not a number: fill them, or remove the attribute to let Decompose "
+                                 "estimate the normals")
         if normals is None and s.thin_sheets:
             normals = mesh_io.read_vertex_normals(mesh)
         if normals is not None:
@@ -217,7 +227,7 @@ class POINTSCALE_OT_decompose(RunsInBackground, bpy.types.Operator):
         results = [name for name in kept if name != keys.BASE_PREVIOUS]
         if results:
             self.report({"INFO"}, f"Decompose '{obj.name}': the earlier results are kept as "
-                                  f"{', '.join(results)}, switched off")
+                                  f"{', '.join(repr(name) for name in results)}, switched off")
         for message in layout.warnings:
             self.report({"WARNING"}, f"Decompose '{obj.name}': {message}")
         for message in getattr(self, "_input_notes", ()):

@@ -19,6 +19,29 @@ def _world_points(obj, into):
     return co @ m[:3, :3].T + m[:3, 3]
 
 
+def _mirror_seams(obj, points) -> list:
+    """[(axis, plane coordinate, vertices on the plane)] of ``obj``'s Mirror modifiers, as
+    Decompose reads them, in its own coordinates: the morph object keeps A's modifiers, and a
+    seam vertex the morph moved off the plane would no longer merge with its reflection (a half
+    model tore down the middle). Empty without Mirror modifiers, with Use Mirror Modifier off,
+    or where Decompose could not honour them (it says why)."""
+    from .decompose import _mirror_planes
+
+    try:
+        planes = _mirror_planes(obj, points)
+    except ValueError:
+        return []
+    if planes is None:
+        return []
+    out = []
+    for a in planes.axes:
+        axis = "xyz".index(a)
+        on_plane = np.abs(points[:, axis] - planes.origin[axis]) <= planes.seam
+        if on_plane.any():
+            out.append((axis, float(planes.origin[axis]), on_plane))
+    return out
+
+
 def morph_problem(context):
     obj = context.active_object
     problem = state.mesh_object_problem(obj) or state.engine_problem()
@@ -36,6 +59,10 @@ def morph_problem(context):
         return "Choose a base mesh, or use the automatic ellipsoid"
     if len(target.data.vertices) == 0:
         return f"The morph target '{target.name}' has no vertices"
+    for o, role in ((obj, "A"), (target, "target B")):
+        if abs(o.matrix_world.to_3x3().determinant()) < 1e-12:
+            return (f"{role} '{o.name}' has a zero scale (or its parent has): it has no shape to morph. Give it a "
+                    "scale on every axis (Object > Transform)")
     if s.morph_base == "OBJECT" and len(s.morph_base_object.data.vertices) == 0:
         return f"The base mesh '{s.morph_base_object.name}' has no vertices"
     return None
@@ -160,6 +187,7 @@ class POINTSCALE_OT_morph(RunsInBackground, bpy.types.Operator):
         self._names = (a_obj.name, b_obj.name, s.morph_base_object.name if s.morph_base == "OBJECT" else None)
         self._a_uid, self._b_uid = a_obj.session_uid, b_obj.session_uid  # names can change during the job
         a = mesh_io.read_basis(a_obj.data).astype(np.float64)
+        self._seams = _mirror_seams(a_obj, a)
         b = _world_points(b_obj, a_obj)
         base = _world_points(s.morph_base_object, a_obj) if s.morph_base == "OBJECT" else None
         return a, b, base, (s.morph_samples, s.morph_align)
@@ -211,6 +239,10 @@ class POINTSCALE_OT_morph(RunsInBackground, bpy.types.Operator):
             self.report({"ERROR"}, f"Morph: '{self._names[0]}' or '{self._names[1]}' changed or disappeared while "
                                    "the morph was computed; nothing was made")
             return {"CANCELLED"}
+        seams = getattr(self, "_seams", ())
+        for axis, origin, on_plane in seams:  # A's copy keeps A's Mirror modifier: its seam must stay merged
+            for p in (p0, pa, pb):
+                p[on_plane, axis] = origin
         try:
             obj = _new_morph_object(context, a_obj, b_obj, p0, pa, pb)
         except (RuntimeError, ValueError) as exc:  # Blender refused a step: nothing half-made stays
