@@ -127,3 +127,41 @@ def test_an_edited_station_pose_in_a_shared_folder_is_refused(tmp_path):
                 {"name": "a", "rotation": [1, 0, 0, 0], "translation": [0, float("nan"), 0]}):
         with pytest.raises(ValueError, match="stations must be a list of scans"):
             check_format_info({"format": "e57", "stations": [bad]}, 10)
+
+
+def test_xyz_comment_lines_are_kept_into_xyz_and_ply_and_said_lost_elsewhere(tmp_path):
+    """'# EPSG:32633 ...' at the top of an XYZ file vanished from every level file and output,
+    and a PLY header's comments from XYZ and LAS outputs, unsaid."""
+    path = tmp_path / "georef.xyz"
+    with open(path, "w") as f:
+        f.write("//X Y Z Intensity\n# EPSG:32633 WGS 84 / UTM zone 33N\n// scanner: RTC360, 2026-11-02\n")
+        np.savetxt(f, np.c_[_plane(600) + [500000.0, 4000000.0, 0.0], np.arange(600)], fmt="%.6f")
+    scan = io.read(path)
+    lines = ["EPSG:32633 WGS 84 / UTM zone 33N", "scanner: RTC360, 2026-11-02"]
+    assert scan.format_info["comments"] == lines and list(scan.vertex_attributes) == ["Intensity"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        io.write(tmp_path / "back.xyz", scan)
+        io.write(tmp_path / "back.ply", scan)
+    again = io.read(tmp_path / "back.xyz")
+    assert again.format_info["comments"] == lines and np.array_equal(again.points, scan.points)
+    ply = io.read(tmp_path / "back.ply")
+    assert ply.format_info["comments"] == lines
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        io.write(tmp_path / "from_ply.xyz", ply)
+    assert io.read(tmp_path / "from_ply.xyz").format_info["comments"] == lines
+    with pytest.warns(UserWarning, match=r"\.pts has no place for the input's comment lines; 2 not written.*EPSG"):
+        io.write(tmp_path / "out.pts", ply)
+
+
+@pytest.mark.parametrize("delimiter,header,hint", [
+    (",", None, "parted by spaces or tabs, not commas"),
+    (";", None, "parted by spaces or tabs, not commas or semicolons"),
+    (" ", "X Y Z", "must start with # or //"),
+])
+def test_an_unreadable_xyz_says_what_it_needs(tmp_path, delimiter, header, hint):
+    path = tmp_path / "odd.xyz"
+    np.savetxt(path, _plane(50), delimiter=delimiter, fmt="%.4f", header=header or "", comments="")
+    with pytest.raises(ValueError, match=hint):
+        io.read(path)

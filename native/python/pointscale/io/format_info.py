@@ -36,6 +36,8 @@ def check_format_info(info: dict, n_points: int) -> None:
         _check_ply(info, n_points)
     elif kind in ("las", "laz"):
         _check_las(info)
+    elif kind == "xyz":
+        _check(info, "comments", _single_lines, "a list of texts of one line each (they become comment lines)")
     elif kind == "e57":
         _check(info, "stations", lambda v: _list_of(v, dict) and all(map(_station, v)),
                "a list of scans (a name of one line, a rotation of 4 numbers not all 0, a translation of 3)")

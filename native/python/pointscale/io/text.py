@@ -13,6 +13,8 @@
       uint16), as the PLY and LAS readers give them, so that every writer writes them as colours
       (a header's integer dtype, red:u2, is kept). Colours in a file without a header are not
       guessed: they stay float64 column_3 ... (add the header line to read them as colours).
+      The other comment lines at the top (# or //: a CRS, the scanner) are kept in
+      format_info["comments"] and written back after the header line, also from a PLY's comments.
 .pts  a first line with the point count, then x y z [intensity] [r g b] (Leica/Faro style):
       4 columns are intensity, 6 are colour, 7 are both. Colours are written as 0..255: 16-bit
       ones (above 255, as LAS stores them) are scaled to 8 bits with a warning; intensities are
@@ -25,6 +27,7 @@ from __future__ import annotations
 
 import io
 import os
+import re
 import warnings
 
 import numpy as np
@@ -39,7 +42,8 @@ _PTS_COLUMNS = {3: (), 4: ("intensity",), 6: ("red", "green", "blue"), 7: ("inte
 
 def read_xyz(path) -> Scan:
     path = os.fspath(path)
-    header, rows = _load(path, skip_first=False)
+    comments, rows = _load(path, skip_first=False)
+    header = comments[0] if comments else None
     names_given = header is not None and _names_columns(header, rows.shape[1])
     if names_given:
         names, dtypes = _parse_header(header, rows.shape[1], path)
@@ -47,14 +51,18 @@ def read_xyz(path) -> Scan:
         if header is not None:
             _warn_if_header_unread(path, header, rows.shape[1])
         names, dtypes = _guess_xyz_columns(rows)
-    exact = _wide_integer_columns(path, names, dtypes) if names_given else {}
+    exact = _wide_integer_columns(path, names, dtypes, skip=len(comments)) if names_given else {}
     declared = _declared_columns(header, rows.shape[1]) if names_given else set()
-    exact.update(_undeclared_wide_integers(path, rows, names, declared, skip=int(header is not None)))
+    exact.update(_undeclared_wide_integers(path, rows, names, declared, skip=len(comments)))
     for i, values in exact.items():
         dtypes[i] = values.dtype.str
     if names_given:
         _name_colour_columns(names, dtypes, rows, declared)
-    return _scan(path, rows, names, dtypes, {"format": "xyz", "header": bool(names_given)}, exact)
+    info = {"format": "xyz", "header": bool(names_given)}
+    kept = [c for c in comments[1 if names_given else 0:] if c]
+    if kept:  # a CRS, the scanner, the date: written back as comment lines (write_xyz), and into PLY
+        info["comments"] = kept
+    return _scan(path, rows, names, dtypes, info, exact)
 
 
 # The names a header may give colour columns (CloudCompare writes R G B), lower-cased.
@@ -184,7 +192,8 @@ def write_xyz(path, scan: Scan) -> None:
     if len(names) > (6 if scan.normals is not None else 3):
         header = " ".join(f"{n}:{c.dtype.str.lstrip('<>=|')}" if i >= 3 else n
                           for i, (n, c) in enumerate(zip(names, columns)))
-    _write(path, _rows(columns) if columns else None, formats, header=header, count=None)
+    _write(path, _rows(columns) if columns else None, formats, header=header, count=None,
+           comments=kept_comments(scan))
 
 
 def write_pts(path, scan: Scan) -> None:
@@ -238,28 +247,51 @@ def _load(path: str, skip_first: bool):
         raise ValueError(f"no such file: {path}")
     try:
         with open_text(path, "a text file") as f:
-            first = f.readline()
             header = None
             if skip_first:
-                header = first
-            elif first.lstrip().startswith((_HEADER_MARK, "//")):
-                header = first.lstrip().lstrip("#/").strip()
+                header = f.readline()
             else:
-                f.seek(0)
+                comments = _leading_comments(f)
+                header = comments[0] if comments else None
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # "input contained no data": reported below as no vertices
                 rows = np.loadtxt(f, dtype=np.float64, ndmin=2, comments=None if skip_first else "#")
     except ValueError as exc:
         if str(exc).startswith(path):  # open_text's own words
             raise
-        raise ValueError(f"{path}: unreadable row ({_first_line(exc)})") from None
+        raise ValueError(f"{path}: unreadable row ({_first_line(exc)}){_unreadable_hint(str(exc))}") from None
     except OSError as exc:
         raise ValueError(f"{path}: cannot read ({exc})") from None
     if rows.size == 0:
         raise ValueError(f"{path}: no vertices")
     if rows.shape[1] < 3:
         raise ValueError(f"{path}: rows need at least x y z, got {rows.shape[1]} columns")
-    return header, rows
+    return (header, rows) if skip_first else (comments, rows)
+
+
+def _unreadable_hint(error: str) -> str:
+    """What a row NumPy could not read usually means: values parted by commas or semicolons
+    (CSV), or column names on a first line with no comment mark."""
+    found = re.search(r"could not convert string '([^']*)'", error) or re.search(r"string '([^']*)'", error)
+    text = found.group(1) if found else ""
+    if "," in text or ";" in text:
+        return ": values must be parted by spaces or tabs, not commas or semicolons"
+    if text[:1].isalpha() and re.search(r"\bat row 0\b", error):
+        return ": a first line of column names must start with # or // (as '//X Y Z R G B')"
+    return ""
+
+
+def _leading_comments(f) -> list:
+    """The texts of the comment lines (# or //) at the top of the file, marks stripped; f is left
+    at the first line of numbers."""
+    found = []
+    while True:
+        where = f.tell()
+        line = f.readline()
+        if not line or not line.lstrip().startswith((_HEADER_MARK, "//")):
+            f.seek(where)
+            return found
+        found.append(line.lstrip().lstrip("#/").strip())
 
 
 def _header_tokens(header: str, ncols: int) -> list | None:
@@ -317,14 +349,14 @@ def _parse_header(header: str, ncols: int, path: str):
     return names, dtypes
 
 
-def _wide_integer_columns(path: str, names: list, dtypes: list) -> dict:
+def _wide_integer_columns(path: str, names: list, dtypes: list, skip: int) -> dict:
     """Column index -> exact values of the columns declared as 64-bit integers (id:u8). The rows
     are parsed as float64, which holds integers only up to 2**53: 2**60 + 1 would be read as
     2**60. These columns are read again as text and converted by Python's own integers."""
     wide = [i for i, d in enumerate(dtypes) if np.dtype(d).kind in "iu" and np.dtype(d).itemsize > 4]
     if not wide:
         return {}
-    texts = _text_columns(path, wide, skip=1)
+    texts = _text_columns(path, wide, skip)
     return {i: _exact_integers(texts[:, j], np.dtype(dtypes[i]), f"column {names[i]}", path)
             for j, i in enumerate(wide)}
 
@@ -445,12 +477,25 @@ def _format(values: np.ndarray) -> str:
     return "%d" if np.asarray(values).dtype.kind in "iub" else "%.17g"
 
 
-def _write(path: str, rows: np.ndarray, formats: list, header: str | None, count: list | None) -> None:
-    """rows under an optional header line; with count (points per block), each block of rows
-    after a line with its count (PTS)."""
+def kept_comments(scan: Scan) -> list:
+    """The comment lines a scan was read with that a text or PLY header can hold: an XYZ file's
+    comment lines, a PLY header's comments and obj_info lines (as "obj_info ...")."""
+    info = scan.format_info
+    if info.get("format") not in ("xyz", "ply"):
+        return []
+    lines = list(info.get("comments", [])) + [f"obj_info {c}" for c in info.get("obj_info", [])]
+    return [c for c in lines if isinstance(c, str)]
+
+
+def _write(path: str, rows: np.ndarray, formats: list, header: str | None, count: list | None,
+           comments: list = ()) -> None:
+    """rows under an optional header line and comment lines; with count (points per block),
+    each block of rows after a line with its count (PTS)."""
     buffer = io.StringIO()
     if header is not None:
         buffer.write(f"{_HEADER_MARK} {header}\n")
+    for comment in comments:
+        buffer.write(f"{_HEADER_MARK} {comment}\n")
     start = 0
     for block in count if count is not None else [len(rows)]:
         if count is not None:
