@@ -179,6 +179,14 @@ FOLDS = "Folds"
 FOLDS_MARKED = "pointscale_folds_marked"  # mesh ID property: how many points show_folds last marked
 
 
+def clear_fold_marks(obj) -> None:
+    """Empties the add-on's ``Folds`` group when it marks points: marks of an earlier result
+    (Show Folds since turned off, or an earlier decomposition) would tell of folds that are gone."""
+    mesh = obj.data
+    if mesh.get(FOLDS_MARKED) and obj.vertex_groups.get(FOLDS) is not None:
+        show_folds(obj, np.zeros(len(mesh.vertices), dtype=bool))
+
+
 def show_folds(obj, mask: np.ndarray) -> bool:
     """The vertex group ``Folds``: weight 1 on the points that fold, none elsewhere. False (and
     nothing changed) when a ``Folds`` group is the artist's own, which is never written. The

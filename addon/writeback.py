@@ -58,8 +58,9 @@ def apply_layout(obj, layout, basis=None, kwargs=None, version="", data=None) ->
     except Exception:
         storage.clear(mesh)  # never leave half-written data
         raise
-    # Show Details' colours belong to the decomposition being replaced: give the artist's back.
+    # Show Details' colours and the Folds marks belong to the decomposition being replaced.
     drop_detail_colors(mesh)
+    keys.clear_fold_marks(obj)
     kept = keys.write_layout(obj, data.levels, data.bands, settings.n_bands, data.base_fingerprint)
     release_levels(layout.dec)
     token = uuid.uuid4().hex

@@ -11,6 +11,8 @@ from ._common import DecomposedOperator, mode_problem, set_mode
 def report_folds(op, obj, folds, done: str) -> None:
     """Say how many points fold (and, with Show Folds, mark them in the 'Folds' vertex group)."""
     settings = obj.data.multiscale
+    if not settings.show_folds:
+        keys.clear_fold_marks(obj)
     marked = settings.show_folds and keys.show_folds(obj, folds.mask)
     if settings.show_folds and not marked:
         op.report({"WARNING"}, f"'{obj.name}' has a vertex group '{keys.FOLDS}' of its own, which Show Folds "
@@ -150,6 +152,12 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
                 kb = keys.get(mesh, keys.band_name(l))
                 if kb is not None:
                     kb.value = 0.0
+            animated = [keys.band_name(l) for l in range(k) if _value_animated(mesh, keys.band_name(l))]
+            if animated:  # their keyframes or drivers set the value again on the next frame
+                self.report({"WARNING"}, f"Bake filter: {', '.join(repr(n) for n in animated)} "
+                                         f"{'is' if len(animated) == 1 else 'are'} keyframed or driven, so the value "
+                                         "comes back on the next frame and the band applies twice (baked and live): "
+                                         "remove the keyframes or driver, or set the slider to 0 in them")
         report_folds(self, obj, folds, f"Baked gains ({_gains_text(values)}){_on_top_text(baked)} into '{keys.FILTER}'")
         if kept:
             self.report({"INFO"}, f"Bake filter: the earlier bake, switched off, is kept as "
@@ -159,13 +167,37 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
 
 
 def _baked_gains_shown(mesh, k: int):
-    """The gains the 'Multiscale Filter' key was baked with, while the viewport shows that key
-    (the next bake multiplies into them, as the band sliders add onto it); else None."""
+    """The gains the 'Multiscale Filter' key shows, while the viewport shows it (the next bake
+    multiplies into them, as the band sliders add onto it); else None. A key dialled to a value
+    v shows about 1 + v (g - 1) of the gains g it was baked with (the key blends positions, and
+    the positions follow the gains nearly linearly): a bake on top of a key at 0.5 took g."""
     kb = keys.get(mesh, keys.FILTER)
     if kb is None or kb.mute or kb.value == 0.0 or keys.FILTER not in keys.owned(mesh, k):
         return None
     baked = storage.baked_gains(mesh, keys.key_fingerprint(mesh, keys.FILTER))
-    return baked if baked is not None and len(baked) == k else None
+    if baked is None or len(baked) != k:
+        return None
+    return baked if kb.value == 1.0 else 1.0 + kb.value * (baked - 1.0)
+
+
+def _value_animated(mesh, name: str) -> bool:
+    """Whether the shape key's value has keyframes or a driver."""
+    animation = mesh.shape_keys.animation_data if mesh.shape_keys is not None else None
+    if animation is None:
+        return False
+    path = f'key_blocks["{name}"].value'
+    return any(c.data_path == path for c in list(animation.drivers) + _fcurves(animation.action))
+
+
+def _fcurves(action) -> list:
+    """An action's F-curves: Action.fcurves up to Blender 4.5, the layered action's channel
+    bags from 5.0 on (where Action.fcurves is gone)."""
+    if action is None:
+        return []
+    if hasattr(action, "fcurves"):
+        return list(action.fcurves)
+    return [c for layer in getattr(action, "layers", ()) for strip in layer.strips
+            for bag in getattr(strip, "channelbags", ()) for c in bag.fcurves]
 
 
 def _gains_text(gains) -> str:

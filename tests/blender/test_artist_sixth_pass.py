@@ -163,3 +163,64 @@ def test_a_zero_normal_attribute_is_refused_naming_it(addon):
     with pytest.raises(RuntimeError, match="its point attribute 'normal' .* has 642 of 642 vectors zero"):
         bpy.ops.pointscale.decompose()
     assert obj.data.shape_keys is None
+
+
+def _marked(obj):
+    group = obj.vertex_groups.get("Folds")
+    if group is None:
+        return 0
+    return sum(1 for v in obj.data.vertices for g in v.groups if g.group == group.index and g.weight > 0)
+
+
+def test_fold_marks_of_an_earlier_result_are_cleared(addon):
+    """With Show Folds off, a bake that no longer folds, and Decompose again, left the 'Folds'
+    group marking 4421 points that no longer fold."""
+    obj = _bumpy_ico_sphere(5)
+    s = obj.data.multiscale
+    s.levels = 3
+    assert bpy.ops.pointscale.decompose() == {"FINISHED"}
+    s.show_folds = True
+    s.bands[0].gain = s.bands[1].gain = 5.0
+    bpy.ops.pointscale.bake_filter()
+    s.bands[0].gain = s.bands[1].gain = 5.0
+    bpy.ops.pointscale.bake_filter()
+    assert _marked(obj) > 1000
+    s.show_folds = False
+    s.prevent_folds = True
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    assert _marked(obj) == 0
+    s.show_folds = True
+    s.prevent_folds = False
+    s.bands[0].gain = s.bands[1].gain = 5.0
+    bpy.ops.pointscale.bake_filter()
+    assert _marked(obj) > 0
+    assert bpy.ops.pointscale.decompose() == {"FINISHED"}
+    assert _marked(obj) == 0
+
+
+def test_a_bake_on_a_filter_key_dialled_down_builds_on_what_is_shown(addon):
+    """'Multiscale Filter' at 0.5, then Bake Filter at unit sliders: the bake built on the full
+    earlier gains and set the key back to 1, so the shape jumped by 0.035 (of 2)."""
+    obj = _bumpy_ico_sphere(5)
+    s = obj.data.multiscale
+    s.levels = 3
+    assert bpy.ops.pointscale.decompose() == {"FINISHED"}
+    s.bands[1].gain = 3.0
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    obj.data.shape_keys.key_blocks["Multiscale Filter"].value = 0.5
+    shown = h.evaluated(obj)
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    assert obj.data.shape_keys.key_blocks["Multiscale Filter"].value == 1.0
+    assert np.abs(h.evaluated(obj) - shown).max() < 1e-4
+
+
+def test_a_keyframed_band_is_said_to_apply_twice_after_a_bake(addon, capfd):
+    obj = _bumpy_ico_sphere(4)
+    obj.data.multiscale.levels = 3
+    assert bpy.ops.pointscale.decompose() == {"FINISHED"}
+    band = obj.data.shape_keys.key_blocks["Band 1"]
+    band.value = 1.0
+    band.keyframe_insert("value", frame=1)
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    out = capfd.readouterr().out
+    assert "'Band 1' is keyframed or driven, so the value comes back on the next frame" in out, out
