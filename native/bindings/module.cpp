@@ -246,10 +246,12 @@ PYBIND11_MODULE(_core, m) {
             rings[i * w + m] = r.order[static_cast<std::size_t>(r.rings[static_cast<std::size_t>(r.slot[i]) * w + m])];
         return to_array(rings, {static_cast<py::ssize_t>(n), r.ring_size});
       });
-  m.def("fold_reference", [](const MultiscaleModel& s, py::object input, int threads) {
-    const OptionalPoints in(input);
-    return without_gil(threads, [&] { return fold_reference(s, in.get()); });
-  }, py::arg("model"), py::arg("input") = py::none(), py::arg("threads") = 0);
+  m.def("fold_reference", [](const MultiscaleModel& s, py::object input, py::object base, py::object base_normals,
+                              int threads) {
+    const OptionalPoints in(input), b(base), bn(base_normals);
+    return without_gil(threads, [&] { return fold_reference(s, in.get(), b.get(), bn.get()); });
+  }, py::arg("model"), py::arg("input") = py::none(), py::arg("base") = py::none(),
+     py::arg("base_normals") = py::none(), py::arg("threads") = 0);
 
   m.def("find_folds", [](const MultiscaleModel& s, const FoldReference& ref, const DoubleArray& result,
                          py::object base, int threads) {

@@ -249,19 +249,30 @@ std::uint16_t folding_bits(const FoldReference& ref, std::uint16_t skip, const S
 
 }  // namespace
 
-FoldReference fold_reference(const MultiscaleModel& model, const Points* input) {
+FoldReference fold_reference(const MultiscaleModel& model, const Points* input, const Points* base,
+                             const Points* base_normals) {
   validate(model);
   if (input) check_rows(input->rows(), model.base.rows(), "input");
+  if ((base == nullptr) != (base_normals == nullptr))
+    throw std::invalid_argument("a fold reference's base and base normals are given together");
+  if (base) {
+    check_rows(base->rows(), model.base.rows(), "base");
+    check_rows(base_normals->rows(), model.base.rows(), "base normals");
+    check_points(*base, "base");
+    check_points(*base_normals, "base normals");
+  }
+  const Points& stored = base ? *base : model.base;
+  const Points& stored_normals = base ? *base_normals : model.base_normals;
   static_assert(base_ring_size <= 16, "ring bits are 16 wide");
-  const std::size_t n = static_cast<std::size_t>(model.base.rows());
+  const std::size_t n = static_cast<std::size_t>(stored.rows());
   FoldReference ref;
-  ref.order = morton_order(model.base);
+  ref.order = morton_order(stored);
   ref.slot.resize(n);
   for (std::size_t t = 0; t < n; ++t) ref.slot[static_cast<std::size_t>(ref.order[t])] = static_cast<Index>(t);
-  ref.ring_size = ring_size_for(model.base.rows());
+  ref.ring_size = ring_size_for(stored.rows());
   const std::size_t width = static_cast<std::size_t>(ref.ring_size);
   {
-    const IndexList rings = base_rings(model.base, model.parts);
+    const IndexList rings = base_rings(stored, model.parts);
     ref.rings.resize(rings.size());
     parallel_for(n, [&](std::size_t b, std::size_t e) {
       for (std::size_t t = b; t < e; ++t) {
@@ -270,8 +281,8 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input) 
       }
     }, {}, 16384);
   }
-  ref.base = in_slot_order(model.base, ref);
-  ref.normals = in_slot_order(model.base_normals, ref);
+  ref.base = in_slot_order(stored, ref);
+  ref.normals = in_slot_order(stored_normals, ref);
   ref.other_sheet.assign(n, 0);
   ref.base_planes.resize(static_cast<Eigen::Index>(n), 3);
   Points input_by_slot;

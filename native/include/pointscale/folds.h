@@ -45,8 +45,12 @@ struct FoldReference {
 
 // The reference of a model. input: #P by 3, its unedited reconstruction (the input), whose
 // own folds over the base are then not counted in results; or nullptr, and every fold over
-// the base counts.
-FoldReference fold_reference(const MultiscaleModel& model, const Points* input);
+// the base counts. base, base_normals: #P by 3 each, the base (in the model's coordinates)
+// and its normals to measure against instead of the model's, or both nullptr: a mirrored
+// model's whole base made exactly symmetric, so that a point and its reflection take the same
+// tests and limiter (std::invalid_argument when only one is given or their rows differ).
+FoldReference fold_reference(const MultiscaleModel& model, const Points* input, const Points* base = nullptr,
+                             const Points* base_normals = nullptr);
 
 // The folds of a result, point by point. For point i and the members j of its ring that lie
 // on the same side of the base as i (stored base normals agreeing, n_i . n_j > 0; a ring

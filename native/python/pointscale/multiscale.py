@@ -147,7 +147,7 @@ class Decomposition:
     def to_dict(self) -> dict[str, np.ndarray]:
         """Every array needed to rebuild this object with from_dict (no pickles)."""
         arrays = dict(self._model.to_arrays())
-        arrays["origin"] = np.asarray(self.origin, dtype=np.float64)
+        arrays["origin"] = np.array(self.origin, dtype=np.float64)  # a copy: editing it must not move the model
         arrays["settings"] = np.frombuffer(json.dumps(self.settings).encode(), dtype=np.uint8)
         arrays["stats"] = np.frombuffer(json.dumps(self.stats).encode(), dtype=np.uint8)
         arrays["format_version"] = np.array([_FORMAT_VERSION])
@@ -330,7 +330,7 @@ def _checked_arrays(arrays):
         raise _bad(f"settings are not valid JSON ({exc})") from None
     if not isinstance(settings, dict):
         raise _bad(f"settings must be a JSON object, got {type(settings).__name__}")
-    origin = floats("origin", (3,), MAX_COORDINATE)
+    origin = floats("origin", (3,), MAX_COORDINATE).copy()  # the caller's array stays the caller's
 
     base = get("base")
     if base.ndim != 2 or base.shape[1:] != (3,) or base.shape[0] < 1:
@@ -758,10 +758,12 @@ def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None, fol
 def _result_with_folds(dec: Decomposition, out: np.ndarray, b, mode: str, fold_reference: str):
     """A reconstruction of the whole model as reconstruct() returns it: the half's points, and
     their Folds unless mode is "ignore"."""
-    from .folds import with_folds
+    from .folds import with_folds, with_folds_of_half
     out = finite_result(out, "the reconstruction")
     if mode == "ignore":
         return dec._symmetric(out)
+    if dec._mirror is not None:
+        return with_folds_of_half(dec, out, b, mode, fold_reference)
     out, found = with_folds(dec, out, b, mode, fold_reference)
     return dec._symmetric(out), found
 
