@@ -1,5 +1,7 @@
 """Files, after a fifth reader's pass (trial, 2026-12-07): CloudCompare's XYZ with normals after
 the colours, a header whose column name holds a space, and E57 files of several stations."""
+import os
+import stat
 import warnings
 
 import numpy as np
@@ -165,3 +167,36 @@ def test_an_unreadable_xyz_says_what_it_needs(tmp_path, delimiter, header, hint)
     np.savetxt(path, _plane(50), delimiter=delimiter, fmt="%.4f", header=header or "", comments="")
     with pytest.raises(ValueError, match=hint):
         io.read(path)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs named pipes")
+def test_a_pipe_or_a_link_to_one_is_never_written_over(tmp_path):
+    """A write goes to a temporary file renamed over the path: a named pipe or a device there
+    became a plain file (as root, save('/dev/null') replaced /dev/null)."""
+    dec = ps.decompose(ps.shapes.bumpy_sphere(2000), levels=2)
+    scan = io.Scan(points=_plane(300))
+    pipe = tmp_path / "pipe.ply"
+    os.mkfifo(pipe)
+    link = tmp_path / "link.ply"
+    link.symlink_to(pipe)
+    for target in (pipe, link):
+        with pytest.raises(ValueError, match="not a regular file"):
+            dec.save(target)
+        with pytest.raises(ValueError, match="not a regular file"):
+            io.write(target, scan)
+        assert stat.S_ISFIFO(os.stat(pipe).st_mode)
+    assert link.is_symlink()
+
+
+def test_a_decompositions_exported_origin_is_its_own_copy():
+    """to_dict()['origin'] was the decomposition's own array: editing the export moved every
+    later reconstruct; from_dict kept the caller's array the same way."""
+    dec = ps.decompose(ps.shapes.bumpy_sphere(3000), levels=3)
+    before = ps.reconstruct(dec)
+    exported = dec.to_dict()
+    exported["origin"] += 10.0
+    assert np.array_equal(ps.reconstruct(dec), before)
+    arrays = dec.to_dict()
+    again = ps.Decomposition.from_dict(arrays)
+    arrays["origin"] += 10.0
+    assert np.array_equal(ps.reconstruct(again), before)

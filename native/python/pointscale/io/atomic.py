@@ -19,6 +19,11 @@ def atomic_write(path):
     path = Path(os.fspath(path))
     if path.is_symlink():  # write through the link, as open() would, not over it
         path = Path(os.path.realpath(path))
+    if path.exists() and not path.is_file():
+        # A rename over a device or a named pipe would replace it with a plain file (as root,
+        # /dev/null itself); a folder cannot be replaced. Nothing is written.
+        kind = "a folder" if path.is_dir() else "not a regular file (a device, a named pipe or a socket)"
+        raise ValueError(f"{os.fspath(path)} is {kind}: write to a file")
     folder = path.parent if str(path.parent) else Path(".")
     folder.mkdir(parents=True, exist_ok=True)
     handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}", dir=folder)
