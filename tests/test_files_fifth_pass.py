@@ -38,26 +38,25 @@ def test_xyz_normals_are_read_wherever_the_header_puts_them(tmp_path, order):
     assert (dec.normals(0)[:, 2] < 0).all()  # the file's side, as with the normals first
 
 
-def test_a_header_with_a_name_holding_a_space_is_said_to_be_unused(tmp_path):
-    """'//X Y Z R G B GPS Time' names 8 columns for 7: every name was dropped, silently."""
+def _coloured_with_gps_time(path, header):
+    """An XYZ file of x y z, R G B and a GPS time column under the header line given."""
     points = _plane(500)
     rgb = np.random.default_rng(2).integers(0, 256, (len(points), 3))
-    path = tmp_path / "spaced.xyz"
-    np.savetxt(path, np.c_[points, rgb, 3e8 + np.arange(len(points))], fmt="%.6f",
-               header="X Y Z R G B GPS Time", comments="//")
+    np.savetxt(path, np.c_[points, rgb, 3e8 + np.arange(len(points))], fmt="%.6f", header=header, comments="//")
+
+
+def test_a_header_with_a_name_holding_a_space_is_said_to_be_unused(tmp_path):
+    """'//X Y Z R G B GPS Time' names 8 columns for 7: every name was dropped, silently."""
+    _coloured_with_gps_time(tmp_path / "spaced.xyz", "X Y Z R G B GPS Time")
     with pytest.warns(UserWarning, match="names 8 columns but the rows have 7.*a column name with a space"):
-        io.read(path)
+        io.read(tmp_path / "spaced.xyz")
 
 
 def test_comma_parted_names_may_hold_spaces(tmp_path):
-    points = _plane(500)
-    rgb = np.random.default_rng(3).integers(0, 256, (len(points), 3))
-    path = tmp_path / "commas.xyz"
-    np.savetxt(path, np.c_[points, rgb, 3e8 + np.arange(len(points))], fmt="%.6f",
-               header="X,Y,Z,R,G,B,GPS Time", comments="//")
+    _coloured_with_gps_time(tmp_path / "commas.xyz", "X,Y,Z,R,G,B,GPS Time")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        scan = io.read(path)
+        scan = io.read(tmp_path / "commas.xyz")
     assert set(scan.vertex_attributes) == {"red", "green", "blue", "GPS_Time"}
     assert scan.vertex_attributes["red"].dtype == np.uint8
 
