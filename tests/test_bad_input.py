@@ -419,3 +419,14 @@ def test_a_decomposition_that_comes_out_not_finite_is_refused(monkeypatch, array
 
 def test_a_finite_model_says_so(dec):
     assert dec._model.base_finite and dec._model.details_finite
+
+
+@pytest.mark.parametrize("kwargs,name", [
+    (dict(kernel="3"), "kernel"), (dict(decimation="0.25"), "decimation"), (dict(kernel=b"1"), "kernel"),
+    (dict(smoother="diffusion", taubin="no"), "taubin"), (dict(smoother="diffusion", taubin=1.5), "taubin"),
+    (dict(smoother="diffusion", taubin=None), "taubin"),
+])
+def test_text_for_a_number_and_anything_for_taubin_are_refused(kwargs, name):
+    """kernel='3' was read as 3.0, and taubin took any value (Ellipsis, 'no', 1.5) as true."""
+    with pytest.raises(ValueError, match=name):
+        ps.decompose(GOOD, levels=2, **kwargs)

@@ -90,9 +90,9 @@ def require_surface(points: np.ndarray, name: str = "points", allow_planar: bool
 
 
 def number(value, name: str, integer: bool = False):
-    """`value` as an int (integer) or a float, or ValueError for what is not one: bools, text
-    for a whole number, 2.5 for a whole number. The ranges are the core's to check."""
-    if isinstance(value, (bool, np.bool_)) or (integer and isinstance(value, str)):
+    """`value` as an int (integer) or a float, or ValueError for what is not one: bools, text,
+    2.5 for a whole number. The ranges are the core's to check."""
+    if isinstance(value, (bool, np.bool_, str, bytes)):  # float("3") would take text for a number
         raise ValueError(f"{name} must be a number, got {value!r}")
     try:
         v = int(value) if integer else float(value)

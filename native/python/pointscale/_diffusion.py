@@ -3,6 +3,8 @@ smoother of decompose and decompose_rayshoot (a module of its own so that neithe
 other). The core checks them (validate(DiffusionOptions), validation.h)."""
 from __future__ import annotations
 
+import numpy as np
+
 from . import _core
 from ._checks import number
 
@@ -14,6 +16,8 @@ def diffusion_options(iterations, lam, mu, taubin, neighbors, *, prefix: str = "
     neighbors = number(neighbors, prefix + "neighbors", integer=True)
     iterations = number(iterations, prefix + "iterations", integer=True)
     if mu is None:
+        if not isinstance(taubin, (bool, np.bool_)):  # "no" or 0.5 would read as true
+            raise ValueError(f"{prefix}taubin must be True or False, got {taubin!r}".replace("diffusion_taubin", "taubin"))
         mu = _core.taubin_mu(lam=lam, pass_band=0.1) if taubin else 0.0
     else:
         mu = number(mu, "mu")
