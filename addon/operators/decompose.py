@@ -95,10 +95,7 @@ def _prepare(op, context):
                 largest, asked, kwargs["decimation"], ps.multiscale.MIN_COARSE_POINTS, parts=True)
         op._levels_fitted = kwargs["levels"]
         k = kwargs["levels"] - 1
-        # Only what the add-on made may be written over: an artist's key, vertex group or
-        # attribute with one of the names it writes is refused, not taken over.
-        problem = (keys.layout_problem(mesh, k, s.n_bands) or keys.groups_problem(obj, k, s.n_bands)
-                   or storage.attributes_problem(mesh, k, preferences.get(context).normal_attributes))
+        problem = _names_taken(context, obj, k)
         if problem:
             raise ValueError(problem)
         # Normals orient level 0 (and tell the sides of thin sheets): an imported point cloud's
@@ -171,6 +168,13 @@ def _changed_meanwhile(context, obj, points, k) -> str | None:
     mesh = obj.data
     if not np.array_equal(mesh_io.read_basis(mesh), points):
         return "its vertices moved while it was being decomposed (decompose again to use them)"
+    return _names_taken(context, obj, k)
+
+
+def _names_taken(context, obj, k) -> str | None:
+    """Only what the add-on made may be written over: an artist's key, vertex group or
+    attribute with one of the names a decomposition of k bands writes is refused, not taken over."""
+    mesh = obj.data
     n_bands = mesh.multiscale.n_bands
     return (keys.layout_problem(mesh, k, n_bands) or keys.groups_problem(obj, k, n_bands)
             or storage.attributes_problem(mesh, k, preferences.get(context).normal_attributes))

@@ -38,9 +38,9 @@ class CallersFloatingPoint {
 
 // parallel_for's loop on n_threads - 1 threads started for it, and the calling thread: for a
 // loop the kept workers cannot take (worker_pool.h).
-template <class WorkOne, class OwnShare>
-void with_threads_of_its_own(int n_threads, int call_threads, const std::fenv_t& env, WorkOne& work_one,
-                             std::atomic<bool>& stop, OwnShare& own_share) {
+template <class HelperShare, class OwnShare>
+void with_threads_of_its_own(int n_threads, int call_threads, const HelperShare& helper_share,
+                             std::atomic<bool>& stop, const OwnShare& own_share) {
   std::vector<std::thread> workers;
   workers.reserve(n_threads - 1);
   // A thread that fails to start (std::system_error when the process is out of threads or
@@ -49,9 +49,8 @@ void with_threads_of_its_own(int n_threads, int call_threads, const std::fenv_t&
   try {
     for (int t = 1; t < n_threads; ++t)
       workers.emplace_back([&] {
-        ThreadCountScope same_count(call_threads);  // for any loop nested in body
-        CallersFloatingPoint same_arithmetic(env);
-        while (work_one()) {}
+        ThreadCountScope same_count(call_threads);  // for any loop nested in body, as a kept worker has
+        helper_share();
       });
   } catch (const std::exception& e) {
     stop = true;
@@ -132,7 +131,7 @@ void parallel_for(std::size_t n, const std::function<void(std::size_t, std::size
     while (work_one()) {}
   };
   if (n_threads == 1 || !run_on_kept_workers(n_threads - 1, call_threads, helper_share, own_share))
-    with_threads_of_its_own(n_threads, call_threads, env, work_one, stop, own_share);
+    with_threads_of_its_own(n_threads, call_threads, helper_share, stop, own_share);
   if (error) std::rethrow_exception(error);
   stage.report(1.0);
 }

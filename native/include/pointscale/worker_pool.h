@@ -1,6 +1,6 @@
 // Worker threads kept between parallel loops: parallel_for's helpers when it can have them.
-// Starting a thread and joining it costs about 35 us here, as much as a loop over a few
-// thousand points; a fold limiter round or a reconstruction runs dozens of short loops in a row.
+// Starting and joining a thread costs as much as a short loop's work, and a fold limiter round
+// or a reconstruction runs dozens of short loops in a row.
 #pragma once
 #include <functional>
 

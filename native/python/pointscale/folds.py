@@ -142,7 +142,7 @@ def with_folds_of_half(dec, out: np.ndarray, base, mode: str, reference: str):
         kind = _core.find_folds(dec._model, ref, dec._full(half), base=base)
         return half, _of_half(dec, Folds(kind=kind, before=kind.copy(), limiter=np.ones(len(kind))))
     # Where the limiter pulls each point: the half's base, as symmetric() makes the half's points.
-    base_half = dec._symmetric(dec._model.base + dec.origin if base is None else np.asarray(base))
+    base_half = dec.base if base is None else dec._symmetric(np.asarray(base))
     n = half.shape[0]
     limiter = np.ones(n)
     before, rounds = None, 0
