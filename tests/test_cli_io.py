@@ -316,6 +316,16 @@ def test_help_version_and_the_smoother_and_encoding_options(tmp_path):
     assert ps.load(tmp_path / "out" / "decomposition.npz").settings["smoother"] == "diffusion"
 
 
+@pytest.mark.parametrize("command", ["decompose", "reconstruct", "info", "demo"])
+def test_every_command_says_what_it_does_in_its_help(command):
+    """`pointscale demo --help` listed its options and nothing of what it does."""
+    from pointscale.cli.parser import build_parser
+    sub = next(a for a in build_parser("ply")._actions if a.dest == "command").choices[command]
+    assert sub.description and len(sub.description) > 40
+    done = run(command, "--help")
+    assert done.returncode == 0 and sub.description.split()[0] in done.stdout
+
+
 def test_command_line_errors_are_reported_not_raised(tmp_path):
     msg = one_line_error(run("decompose", str(tmp_path / "missing.ply"), "-o", str(tmp_path / "o")))
     assert "missing.ply" in msg

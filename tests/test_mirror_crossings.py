@@ -59,3 +59,20 @@ def test_an_edit_that_keeps_the_half_on_its_side_says_nothing(half_ellipsoid):
     lifted[:, 2] += 0.1 * np.exp(-np.sum((lifted - [0.0, 1.0, 0.0]) ** 2, axis=1) / 0.1)
     _, said = rebuilt(dec, lifted)
     assert not any("mirror plane" in s for s in said), said
+
+
+@pytest.mark.parametrize("caller", ["find_folds", "Reconstructor.reconstruct", "reconstruct_levels"])
+def test_the_warning_names_the_function_called(half_ellipsoid, caller):
+    """Each function that takes an edited base says its own name (find_folds said
+    "reconstruct:", which the caller never called)."""
+    dec = half_ellipsoid
+    pushed = dec.base.copy()
+    pushed[:, 1] -= 0.05
+    call = {"find_folds": lambda: ps.find_folds(dec, ps.reconstruct(dec), base=pushed),
+            "Reconstructor.reconstruct": lambda: ps.Reconstructor(dec).reconstruct(base=pushed),
+            "reconstruct_levels": lambda: ps.reconstruct_levels(dec, base=pushed)}[caller]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        call()
+    said = [str(w.message) for w in caught if "mirror plane" in str(w.message)]
+    assert said and all(s.startswith(f"{caller}: ") for s in said), said

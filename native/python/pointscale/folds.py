@@ -99,7 +99,7 @@ def find_folds(dec, points, base=None, *, fold_reference: str = "input") -> Fold
     p = as_points(points, "points")  # its count the core checks (validation.h)
     if dec._mirror is not None and p.shape[0] != dec.n_points:  # the half's, which only this package knows
         raise ValueError(f"points must have the decomposition's {dec.n_points} points, got {p.shape[0]}")
-    kind = _core.find_folds(dec._model, ref, dec._full(p), base=_base_array(dec, base))
+    kind = _core.find_folds(dec._model, ref, dec._full(p), base=_base_array(dec, base, "find_folds"))
     return _of_half(dec, Folds(kind=kind, before=kind.copy(), limiter=np.ones(len(kind))))
 
 

@@ -693,7 +693,7 @@ def _gains_array(dec: Decomposition, gains) -> np.ndarray:
     return np.ascontiguousarray(g)
 
 
-def _base_array(dec: Decomposition, base):
+def _base_array(dec: Decomposition, base, caller: str = "reconstruct"):
     """The edited base, checked, in world coordinates (the core centres it); of a mirrored
     decomposition, the half's edit (its move from dec.base) mirrored onto the whole model's own
     base, so that every point the edit leaves alone keeps its base bit for bit (the whole model
@@ -706,11 +706,11 @@ def _base_array(dec: Decomposition, base):
     if b.shape[0] != dec.n_points:  # the half's, which only this package knows
         raise ValueError(f"base must have the decomposition's {dec.n_points} points, got {b.shape[0]}")
     require_near(b, dec.origin, "base", "the decomposition")
-    _check_mirror_crossings(dec._mirror, b)
+    _check_mirror_crossings(dec._mirror, b, caller)
     return (dec._model.base + dec.origin) + dec._mirror.full_vectors(b - dec.base)
 
 
-def _check_mirror_crossings(symmetry, b: np.ndarray) -> None:
+def _check_mirror_crossings(symmetry, b: np.ndarray, caller: str) -> None:
     """An edited half of a mirrored model that reaches across its plane: the result is held at
     the plane there, as Blender's Mirror modifier with Clipping holds vertices, so a few points
     pushed over by a brush are said in a warning; a half moved or flipped across the plane as a
@@ -722,7 +722,7 @@ def _check_mirror_crossings(symmetry, b: np.ndarray) -> None:
                              "beyond): a mirrored model is one half and its reflection, so a half moved or flipped "
                              "across its plane overlaps its own mirror image. Keep the half on its side (flip the "
                              "whole model, or decompose the flipped half again)")
-        warnings.warn(f"reconstruct: {count} points of the edited base lie across {plane} (up to {depth:.3g} "
+        warnings.warn(f"{caller}: {count} points of the edited base lie across {plane} (up to {depth:.3g} "
                       "beyond); a mirrored model's half stays on its side, so their results are held at the "
                       "plane, as the Mirror modifier's Clipping holds vertices", stacklevel=4)
 
@@ -792,7 +792,7 @@ class Reconstructor:
         level (n, 3), or (points, Folds) with folds "report" or "prevent"."""
         from .folds import _fold_mode_option, _reference_option
         g = _gains_array(self._dec, gains)
-        b = _base_array(self._dec, base)
+        b = _base_array(self._dec, base, "Reconstructor.reconstruct")
         mode = _fold_mode_option(folds)
         _reference_option(fold_reference)
         out = self._core.reconstruct(g, base=b, progress=as_callback(progress), origin=self._dec.origin)
@@ -802,7 +802,8 @@ class Reconstructor:
 def reconstruct_levels(dec: Decomposition, gains=None, base=None) -> np.ndarray:
     """Every level P^0..P^k rebuilt like reconstruct(): (k+1, n, 3)."""
     _check_decomposition(dec)
-    levels, _ = dec._reconstruct(_gains_array(dec, gains), _base_array(dec, base), keep_levels=True)
+    levels, _ = dec._reconstruct(_gains_array(dec, gains), _base_array(dec, base, "reconstruct_levels"),
+                                 keep_levels=True)
     return finite_result(np.stack([dec._symmetric(level) for level in levels]), "the reconstruction")
 
 
