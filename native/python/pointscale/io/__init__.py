@@ -69,7 +69,7 @@ def write(path, scan: Scan) -> None:
     if scan.n_faces and suffix in _FORMATS_WITHOUT_FACES:
         warnings.warn(f"{os.fspath(path)}: {suffix} has no place for faces; {scan.n_faces} faces"
                       f"{' and their attributes' if scan.face_attributes else ''} not written", stacklevel=2)
-    if suffix not in (".ply", ".xyz") and scan.format_info.get("format") in ("ply", "xyz"):
+    if suffix not in (".ply", ".xyz") and scan.format_info.get("format") in ("ply", "xyz", "pts"):
         from .text import kept_comments
         lines = kept_comments(scan)
         if lines:  # a CRS in a comment is the kind of thing that must not vanish unsaid

@@ -20,7 +20,9 @@
       ones (above 255, as LAS stores them) are scaled to 8 bits with a warning; intensities are
       written as they are, with a warning when outside Leica's -2048..2047. A file of several scans, each block
       after its own count line, is read whole with vertex attribute scan_id (uint16), and a scan
-      whose scan_id is in increasing order is written that way.
+      whose scan_id is in increasing order is written that way. Comment lines (# or //) above
+      the first count line are kept in format_info["comments"] and written into XYZ and PLY
+      (not into a .pts: Leica's readers take none).
 Coordinates are written with %.17g, which float64 reads back exactly.
 """
 from __future__ import annotations
@@ -126,13 +128,16 @@ def _undeclared_wide_integers(path: str, rows: np.ndarray, names: list, declared
 
 def read_pts(path) -> Scan:
     path = os.fspath(path)
-    rows, blocks = _pts_rows(path)
+    rows, blocks, comments = _pts_rows(path)
     extra = _PTS_COLUMNS.get(rows.shape[1])
     if extra is None:
         raise ValueError(f"{path}: .pts rows have 3, 4, 6 or 7 columns, got {rows.shape[1]}")
     names = ["x", "y", "z", *extra]
     dtypes = ["f8"] * 3 + [_integer_dtype(rows[:, 3 + i], name) for i, name in enumerate(extra)]
-    scan = _scan(path, rows, names, dtypes, {"format": "pts"})
+    info = {"format": "pts"}
+    if comments:  # written back into XYZ and PLY; Leica's readers take none in a .pts
+        info["comments"] = comments
+    scan = _scan(path, rows, names, dtypes, info)
     if len(blocks) > 1:  # several scans, each after its own count line
         scan.vertex_attributes["scan_id"] = np.repeat(np.arange(len(blocks), dtype=np.uint16), blocks)
     return scan
@@ -142,8 +147,9 @@ def _pts_rows(path: str):
     """(rows (n, c) float64, points per block): one count line and its rows, or several in turn."""
     if not os.path.isfile(path):
         raise ValueError(f"no such file: {path}")
+    comments = []
     try:
-        first, rows = _load(path, skip_first=True)
+        first, rows = _load(path, skip_first=True, leading=comments)
     except ValueError as exc:
         single = exc  # a second count line makes loadtxt fail: try blocks
     else:
@@ -152,13 +158,14 @@ def _pts_rows(path: str):
         except (ValueError, IndexError, AttributeError):
             raise ValueError(f"{path}: a .pts file starts with its point count, got {first.strip()[:40]!r}") from None
         if count != len(rows):
-            raise ValueError(f"{path}: the first line says {count} points, the file has {len(rows)} (truncated?)")
-        return rows, [count]
+            raise ValueError(f"{path}: the count line says {count} points, the file has {len(rows)} (truncated?)")
+        return rows, [count], comments
     try:
         with open_text(path, "a text file") as f:
             lines = [line for line in f.read().splitlines() if line.strip()]
     except (OSError, ValueError):
         raise single from None
+    lines = lines[len(comments):]  # the comment lines above the first count line
     parts, blocks, i = [], [], 0
     while i < len(lines):
         words = lines[i].split()
@@ -176,7 +183,7 @@ def _pts_rows(path: str):
     rows = np.concatenate([p for p in parts if len(p)]) if any(len(p) for p in parts) else np.zeros((0, 3))
     if len(rows) == 0:
         raise ValueError(f"{path}: no vertices")
-    return rows, blocks
+    return rows, blocks, comments
 
 
 def write_xyz(path, scan: Scan) -> None:
@@ -241,14 +248,18 @@ def _warn_if_outside_pts_intensity(path: str, intensity) -> None:
 
 # -- helpers ----------------------------------------------------------------------------------
 
-def _load(path: str, skip_first: bool):
-    """(the first line when it is a header or count line, rows (n, c) float64)."""
+def _load(path: str, skip_first: bool, leading: list | None = None):
+    """(the first line when it is a header or count line, rows (n, c) float64). With skip_first
+    (PTS), comment lines above the count line are put into `leading`."""
     if not os.path.isfile(path):
         raise ValueError(f"no such file: {path}")
     try:
         with open_text(path, "a text file") as f:
             header = None
             if skip_first:
+                found = _leading_comments(f)
+                if leading is not None:
+                    leading.extend(found)
                 header = f.readline()
             else:
                 comments = _leading_comments(f)
@@ -481,7 +492,7 @@ def kept_comments(scan: Scan) -> list:
     """The comment lines a scan was read with that a text or PLY header can hold: an XYZ file's
     comment lines, a PLY header's comments and obj_info lines (as "obj_info ...")."""
     info = scan.format_info
-    if info.get("format") not in ("xyz", "ply"):
+    if info.get("format") not in ("xyz", "ply", "pts"):
         return []
     lines = list(info.get("comments", [])) + [f"obj_info {c}" for c in info.get("obj_info", [])]
     return [c for c in lines if isinstance(c, str)]

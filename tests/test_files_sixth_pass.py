@@ -1,0 +1,65 @@
+"""Files, sixth pass (2026-12-07): comment lines above a PTS file's count line."""
+import warnings
+
+import numpy as np
+import pytest
+
+from pointscale import io
+from helpers import run_cli
+
+
+def _write_pts(path, blocks, comments):
+    rng = np.random.default_rng(len(blocks))
+    with open(path, "w") as f:
+        for c in comments:
+            f.write(f"{c}\n")
+        rows = []
+        for count in blocks:
+            block = np.c_[rng.uniform(-5, 5, (count, 3)) + [500000.0, 4000000.0, 120.0],
+                          rng.integers(-2048, 2048, count), rng.integers(0, 256, (count, 3))]
+            f.write(f"{count}\n")
+            for r in block:
+                f.write(f"{r[0]:.17g} {r[1]:.17g} {r[2]:.17g} {int(r[3])} {int(r[4])} {int(r[5])} {int(r[6])}\n")
+            rows.append(block)
+    return np.concatenate(rows)
+
+
+@pytest.mark.parametrize("blocks", [[700], [400, 250, 90]])
+def test_pts_comment_lines_are_read_and_kept_into_xyz_and_ply(tmp_path, blocks):
+    """A .pts with a CRS line above its count was refused as 'the number of columns changed
+    from 1 to 7' (NumPy's words, with its advice on `usecols`)."""
+    comments = ["// CRS: EPSG:25832", "# scanner: P50, station 3"]
+    rows = _write_pts(tmp_path / "scan.pts", blocks, comments)
+    scan = io.read(tmp_path / "scan.pts")
+    assert np.array_equal(scan.points, rows[:, :3])
+    assert np.array_equal(scan.vertex_attributes["intensity"], rows[:, 3].astype(int))
+    assert scan.format_info["comments"] == ["CRS: EPSG:25832", "scanner: P50, station 3"]
+    if len(blocks) > 1:
+        assert np.array_equal(np.bincount(scan.vertex_attributes["scan_id"]), blocks)
+    for suffix in (".xyz", ".ply"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # nothing is said to be left out
+            io.write(tmp_path / f"out{suffix}", scan)
+        back = io.read(tmp_path / f"out{suffix}")
+        assert back.format_info["comments"] == scan.format_info["comments"], suffix
+        assert np.array_equal(back.points, scan.points)
+    with pytest.warns(UserWarning, match="no place for the input's comment lines; 2 not written"):
+        io.write(tmp_path / "out.pts", scan)  # Leica's readers take no comment lines
+    assert "comments" not in io.read(tmp_path / "out.pts").format_info
+
+
+def test_pts_comments_survive_the_command_line(tmp_path):
+    _write_pts(tmp_path / "scan.pts", [3000], ["# CRS: EPSG:32633"])
+    done = run_cli("decompose", str(tmp_path / "scan.pts"), "-o", str(tmp_path / "out"), "--levels", "3")
+    assert done.returncode == 0, done.stderr
+    done = run_cli("reconstruct", str(tmp_path / "out"), "--gains", "1,2", "-o", str(tmp_path / "boosted.xyz"))
+    assert done.returncode == 0, done.stderr
+    assert io.read(tmp_path / "boosted.xyz").format_info["comments"] == ["CRS: EPSG:32633"]
+
+
+def test_a_pts_count_line_that_disagrees_is_still_refused_after_comments(tmp_path):
+    _write_pts(tmp_path / "scan.pts", [500], ["# a comment"])
+    text = (tmp_path / "scan.pts").read_text().replace("\n500\n", "\n600\n", 1)
+    (tmp_path / "scan.pts").write_text(text)
+    with pytest.raises(ValueError, match="says 600 points, the file has 500"):
+        io.read(tmp_path / "scan.pts")
