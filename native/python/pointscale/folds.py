@@ -99,8 +99,21 @@ def find_folds(dec, points, base=None, *, fold_reference: str = "input") -> Fold
     p = as_points(points, "points")  # its count the core checks (validation.h)
     if dec._mirror is not None and p.shape[0] != dec.n_points:  # the half's, which only this package knows
         raise ValueError(f"points must have the decomposition's {dec.n_points} points, got {p.shape[0]}")
-    kind = _core.find_folds(dec._model, ref, dec._full(p), base=_base_array(dec, base, "find_folds"))
+    b = _whole_symmetric_base(dec, _base_array(dec, base, "find_folds"))
+    kind = _core.find_folds(dec._model, ref, dec._full(p), base=b)
     return _of_half(dec, Folds(kind=kind, before=kind.copy(), limiter=np.ones(len(kind))))
+
+
+def _whole_symmetric_base(dec, base):
+    """A mirrored decomposition's edited whole base (as _base_array gives it: the half's edit
+    on the whole model's own base) made exactly symmetric, as the reference's stored base and
+    the half's points are (reference_for); unchanged without a mirror or an edit. Measured
+    against the whole model's own base, which is symmetric only to its levels' fits, any
+    edited base, even the stored one handed back, found hundreds of false folds, and Prevent
+    Folds moved the whole model by up to 15% of its size."""
+    if base is None or dec._mirror is None:
+        return base
+    return np.ascontiguousarray(dec._full(dec._symmetric(np.asarray(base))))
 
 
 def _fold_mode_option(folds) -> str:
@@ -138,6 +151,7 @@ def with_folds_of_half(dec, out: np.ndarray, base, mode: str, reference: str):
     m = dec._mirror
     ref = reference_for(dec, reference)
     half = dec._symmetric(out)
+    base = _whole_symmetric_base(dec, base)
     if mode == "report":
         kind = _core.find_folds(dec._model, ref, dec._full(half), base=base)
         return half, _of_half(dec, Folds(kind=kind, before=kind.copy(), limiter=np.ones(len(kind))))
