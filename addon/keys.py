@@ -342,12 +342,16 @@ def keep_as_previous(obj, name: str, mine: set) -> bool:
 
 def remove_layout(obj, k: int) -> list:
     """Removes the keys this add-on made, but for the kept "(previous)" keys, which stay
-    recorded as the add-on's (a later Decompose replaces them); an edited Level 0 is kept as
-    one first. Returns their names."""
+    recorded as the add-on's (a later Decompose replaces them); an edited Level 0 and the last
+    Multiscale Edit and Filter are kept as ones first, as a new Decompose keeps them. Returns
+    their names."""
     mesh = obj.data
     active = obj.active_shape_key.name if obj.active_shape_key is not None else None
     mine = owned(mesh, k)
     keep_edited_base(obj, mine)
+    for name in (EDIT, FILTER):
+        if keep_as_previous(obj, name, mine) and active == name:
+            active = name + PREVIOUS
     kept = [name for name in KEPT if name in mine and get(mesh, name) is not None]
     for name in sorted(mine - set(kept)):
         remove_key(obj, name)

@@ -79,13 +79,21 @@ def apply_layout(obj, layout, basis=None, kwargs=None, version="", data=None) ->
 
 
 def clear_problem(obj) -> str | None:
-    """Why Clear cannot go ahead without losing something: an edited 'Level 0' to keep where the
-    artist has a key of that name of their own. Checked before anything is removed."""
+    """Why Clear cannot go ahead without losing something: an edited 'Level 0' or a result to
+    keep as "(previous)" where the artist has a key of that name of their own. Checked before
+    anything is removed."""
     mesh = obj.data
     mine = keys.owned(mesh, max(mesh.multiscale.n_bands, 0))
-    if keys.edited_base(mesh, mine) is None:
-        return None
-    return keys.own_key_problem(mesh, keys.BASE_PREVIOUS, mine)
+    if keys.edited_base(mesh, mine) is not None:
+        problem = keys.own_key_problem(mesh, keys.BASE_PREVIOUS, mine)
+        if problem:
+            return problem
+    for name in (keys.EDIT, keys.FILTER):
+        if name in mine and keys.get(mesh, name) is not None:
+            problem = keys.own_key_problem(mesh, name + keys.PREVIOUS, mine)
+            if problem:
+                return problem
+    return None
 
 
 def clear(obj) -> list:

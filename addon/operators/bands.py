@@ -27,10 +27,12 @@ class POINTSCALE_OT_paint_band_mask(DecomposedOperator, bpy.types.Operator):
         k = obj.data.multiscale.n_bands
         if self.band >= k:
             self.report({"ERROR"}, f"band {self.band} does not exist: '{obj.name}' has bands 0..{k - 1}")
+            self.return_to_mode(obj)
             return {"CANCELLED"}
         kb = keys.get(obj.data, keys.band_name(self.band))
         if kb is None:
             self.report({"ERROR"}, f"'{obj.name}' has no key '{keys.band_name(self.band)}': Decompose again")
+            self.return_to_mode(obj)
             return {"CANCELLED"}
         try:
             vg = keys.ensure_mask(obj, self.band)
@@ -44,6 +46,9 @@ class POINTSCALE_OT_paint_band_mask(DecomposedOperator, bpy.types.Operator):
             problem = set_mode(obj, "WEIGHT_PAINT")
             if problem:
                 self.report({"WARNING"}, f"Paint band mask: '{vg.name}' is ready, but {problem}")
+                self.return_to_mode(obj)
+        else:  # the mask is ready; the artist stays where they were (Edit, Sculpt...)
+            self.return_to_mode(obj)
         return {"FINISHED"}
 
 

@@ -58,3 +58,57 @@ def test_a_nudge_of_one_base_vertex_of_a_mirrored_half_folds_nowhere(addon):
         moved = np.linalg.norm(h.key(mesh, "Multiscale Edit") - basis, axis=1)
         moved[top] = 0.0
         assert moved.max() < 1e-4, (prevent, moved.max())  # the nudge's own reach, in float32
+
+
+def test_clear_keeps_the_last_results_as_decompose_again_does(addon):
+    """Clear removed Multiscale Edit and Multiscale Filter, the artist's results, while it kept
+    the intermediate 'Level 0 (previous)' (the viewport jumped back by 0.32)."""
+    obj = h.mesh_object(h.noisy_sphere(3000))
+    mesh = obj.data
+    h.decompose(obj, levels=3)
+    level0 = h.key(mesh, "Level 0")
+    level0[:, 2] += 0.2 * np.exp(-np.sum((level0 - level0[np.argmax(level0[:, 2])]) ** 2, axis=1) / 0.3)
+    h.set_key(mesh, "Level 0", level0)
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    mesh.multiscale.bands[1].gain = 2.0
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    results = {name: h.key(mesh, name) for name in ("Multiscale Edit", "Multiscale Filter")}
+    assert bpy.ops.pointscale.clear() == {"FINISHED"}
+    names = set(mesh.shape_keys.key_blocks.keys())
+    assert names == {"Basis", "Level 0 (previous)", "Multiscale Edit (previous)", "Multiscale Filter (previous)"}
+    for name, co in results.items():
+        assert np.array_equal(h.key(mesh, name + " (previous)"), co)
+        assert mesh.shape_keys.key_blocks[name + " (previous)"].value == 0.0
+    # A second Decompose and Clear replace them, as before.
+    h.decompose(obj, levels=3)
+    assert bpy.ops.pointscale.clear() == {"FINISHED"}
+    assert set(mesh.shape_keys.key_blocks.keys()) == names
+
+
+def test_clear_refuses_where_a_result_would_be_kept_over_the_artists_own_key(addon):
+    obj = h.mesh_object(h.noisy_sphere(3000))
+    mesh = obj.data
+    h.decompose(obj, levels=3)
+    mesh.multiscale.bands[0].gain = 0.5
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    obj.shape_key_add(name="Multiscale Filter (previous)", from_mix=False)
+    with pytest.raises(RuntimeError, match="shape key 'Multiscale Filter \\(previous\\)' of its own"):
+        bpy.ops.pointscale.clear()
+    assert mesh.shape_keys.key_blocks.get("Multiscale Filter") is not None  # nothing removed
+
+
+@pytest.mark.parametrize("mode", ["EDIT", "SCULPT"])
+def test_paint_band_mask_leaves_the_artist_in_their_mode(addon, mode):
+    """A refused band, and a mask made without entering Weight Paint, left the object in Object
+    Mode."""
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=4)
+    obj = bpy.context.active_object
+    h.decompose(obj, levels=3)
+    bpy.context.view_layer.objects.active = obj
+    bpy.ops.object.mode_set(mode=mode)
+    with pytest.raises(RuntimeError, match="band 7 does not exist"):
+        bpy.ops.pointscale.paint_band_mask(band=7)
+    assert obj.mode == mode
+    assert bpy.ops.pointscale.paint_band_mask(band=1, enter_paint=False) == {"FINISHED"}
+    assert obj.mode == mode and obj.vertex_groups.get("Band 1 mask") is not None
+    bpy.ops.object.mode_set(mode="OBJECT")
