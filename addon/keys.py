@@ -9,6 +9,8 @@ edited ``Level 0``.
 
 from __future__ import annotations
 
+import zlib
+
 import numpy as np
 
 from . import logic, mesh_io, recipe
@@ -23,6 +25,11 @@ BASE_PREVIOUS = LEVEL.format(0) + PREVIOUS
 KEPT = (EDIT + PREVIOUS, FILTER + PREVIOUS, BASE_PREVIOUS)  # kept for the artist: switched off, never rewritten
 RESULTS = (EDIT, FILTER) + KEPT  # the keys shown alone over the original, or not at all
 WRITTEN_BASE = "pointscale_base"  # mesh ID property: fingerprint of 'Level 0' as Decompose wrote it
+# Mesh ID property: {key name: CRC-32 (hex) of its positions as Decompose wrote them}, for the
+# Level keys above 0 and the Band keys. Only Level 0 is the base a rebuild reads: an edit of
+# another is said to be unused, and kept as "<name> (previous)" when a Decompose or Clear
+# would drop it. A checksum, not a hash: Rebuild Detail checks every such key on each call.
+WRITTEN_LAYOUT = "pointscale_layout_checksums"
 OWNED = "pointscale_keys"  # mesh ID property: the key names this add-on created
 GROUPS = "pointscale_groups"  # mesh ID property: the vertex groups this add-on created
 BAND_MIN = -1.0  # gain 0
@@ -99,6 +106,10 @@ def layout_problem(mesh, k: int, old_k: int) -> str | None:
     for name in [level_name(l) for l in range(k)] + [band_name(l) for l in range(k)] + list(RESULTS):
         if name in kbs and name not in mine:
             return f"it has a shape key '{name}' of its own: rename it first, the decomposition writes that name"
+    for name in edited_layout_keys(mesh, mine):
+        if name + PREVIOUS in kbs and name + PREVIOUS not in mine:
+            return (f"it has a shape key '{name + PREVIOUS}' of its own, where the edited '{name}' would be kept: "
+                    "rename that key first")
     return None
 
 
@@ -228,10 +239,13 @@ def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int, base_fi
     k = levels.shape[0]
     existed = {kb.name for kb in key_blocks(mesh)} if key_blocks(mesh) is not None else set()
     kept = [BASE_PREVIOUS] if keep_edited_base(obj, mine, levels[0]) else []
+    kept += keep_edited_layout(obj, mine)
     layout = [level_name(l) for l in range(k)] + [band_name(l) for l in range(k)]
     for l in range(k):
         ensure_key(obj, level_name(l), levels[l]).value = 0.0
     mesh[WRITTEN_BASE] = base_fingerprint or _fingerprint(levels[0])
+    mesh[WRITTEN_LAYOUT] = {**{level_name(l): _checksum(levels[l]) for l in range(1, k)},
+                            **{band_name(l): _checksum(bands[l]) for l in range(k)}}
     for l in range(k):
         before = get(mesh, band_name(l))
         chosen = before.vertex_group if before is not None else ""
@@ -245,10 +259,12 @@ def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int, base_fi
         else:
             kb.vertex_group = mask.name if mask is not None and mask.name in groups else ""
     for name in sorted(mine - set(layout) - set(RESULTS)):
-        remove_key(obj, name)
+        if not name.endswith(PREVIOUS):
+            remove_key(obj, name)
     kept += [name + PREVIOUS for name in (EDIT, FILTER) if keep_as_previous(obj, name, mine)]
     # The "(previous)" keys stay the add-on's: the next Decompose replaces them, Clear keeps them.
-    mesh[OWNED] = layout + [name for name in KEPT if get(mesh, name) is not None and (name in mine or name in kept)]
+    mesh[OWNED] = layout + sorted(name for name in mine | set(kept)
+                                  if name.endswith(PREVIOUS) and get(mesh, name) is not None)
     set_owned_groups(mesh, groups)
     _in_layout_order(obj, layout, set(layout) - existed)
     _restore_active(obj, active)
@@ -275,6 +291,64 @@ def _in_layout_order(obj, layout: list, new: set) -> None:
 
 def _fingerprint(co) -> str:
     return recipe.fingerprint(np.ascontiguousarray(co, dtype=np.float32))
+
+
+def _checksum(co) -> str:
+    """CRC-32 of the positions as a key holds them (float32), with their count."""
+    co = np.ascontiguousarray(co, dtype=np.float32)
+    return f"{len(co)}:{zlib.crc32(memoryview(co).cast('B')):08x}"
+
+
+def edited_layout_keys(mesh, mine: set) -> list:
+    """The add-on's Level keys above 0 and Band keys whose positions differ from what Decompose
+    wrote (none for a decomposition made before the checksums were kept)."""
+    written = mesh.get(WRITTEN_LAYOUT)
+    if written is None:
+        return []
+    edited = []
+    for name, checksum in written.items():
+        kb = get(mesh, name)
+        if kb is not None and name in mine and _checksum(mesh_io.read_key(kb)) != checksum:
+            edited.append(name)
+    return edited
+
+
+def unused_edits_message(mesh, done: str) -> str | None:
+    """The warning for Level (above 0) and Band keys edited since Decompose, which nothing
+    reads, or None."""
+    edited = edited_layout_keys(mesh, owned(mesh, mesh.multiscale.n_bands))
+    if not edited:
+        return None
+    names = ", ".join(repr(name) for name in edited)
+    return (f"{done}, but {names} {'was' if len(edited) == 1 else 'were'} edited since Decompose and "
+            f"{'is' if len(edited) == 1 else 'are'} not used: only '{level_name(0)}' is the base it builds on "
+            f"(Edit Base edits it). A new Decompose or Clear keeps the edit as '{edited[0]}{PREVIOUS}'")
+
+
+def is_edited_layout_copy(name: str) -> bool:
+    """Whether ``name`` is a kept copy of an edited Level (above 0) or Band key."""
+    if not name.endswith(PREVIOUS) or name == BASE_PREVIOUS:
+        return False
+    original = name[: -len(PREVIOUS)]
+    return original.startswith(("Level ", "Band ")) and original.split(" ", 1)[1].isdigit()
+
+
+def keep_edited_layout(obj, mine: set) -> list:
+    """Copies each edited Level (above 0) and Band key into "<name> (previous)", switched off
+    (replacing an older one of the add-on's), before a new decomposition or Clear writes over
+    it or removes it. Returns the names made. An artist's own key of such a name is never
+    written over: ValueError (own_key_problem)."""
+    edited = edited_layout_keys(obj.data, mine)
+    for name in edited:
+        problem = own_key_problem(obj.data, name + PREVIOUS, mine)
+        if problem:
+            raise ValueError(problem)
+    made = []
+    for name in edited:
+        ensure_key(obj, name + PREVIOUS, mesh_io.read_key(get(obj.data, name))).value = 0.0
+        mine.add(name + PREVIOUS)
+        made.append(name + PREVIOUS)
+    return made
 
 
 def key_fingerprint(mesh, name: str) -> str | None:
@@ -349,18 +423,20 @@ def remove_layout(obj, k: int) -> list:
     active = obj.active_shape_key.name if obj.active_shape_key is not None else None
     mine = owned(mesh, k)
     keep_edited_base(obj, mine)
+    keep_edited_layout(obj, mine)
     for name in (EDIT, FILTER):
         if keep_as_previous(obj, name, mine) and active == name:
             active = name + PREVIOUS
-    kept = [name for name in KEPT if name in mine and get(mesh, name) is not None]
+    kept = sorted(name for name in mine if name.endswith(PREVIOUS) and get(mesh, name) is not None)
     for name in sorted(mine - set(kept)):
         remove_key(obj, name)
     if kept:
         mesh[OWNED] = kept
     elif OWNED in mesh.keys():
         del mesh[OWNED]
-    if WRITTEN_BASE in mesh.keys():
-        del mesh[WRITTEN_BASE]
+    for prop in (WRITTEN_BASE, WRITTEN_LAYOUT):
+        if prop in mesh.keys():
+            del mesh[prop]
     _restore_active(obj, active)
     return kept
 

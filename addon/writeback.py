@@ -88,6 +88,10 @@ def clear_problem(obj) -> str | None:
         problem = keys.own_key_problem(mesh, keys.BASE_PREVIOUS, mine)
         if problem:
             return problem
+    for name in keys.edited_layout_keys(mesh, mine):
+        problem = keys.own_key_problem(mesh, name + keys.PREVIOUS, mine)
+        if problem:
+            return problem
     for name in (keys.EDIT, keys.FILTER):
         if name in mine and keys.get(mesh, name) is not None:
             problem = keys.own_key_problem(mesh, name + keys.PREVIOUS, mine)
@@ -135,7 +139,11 @@ def clear(obj) -> list:
         notes.append(f"kept the painted {', '.join(painted)} (delete them under Vertex Groups if unwanted)")
     if keys.BASE_PREVIOUS in previous:
         notes.append(f"kept the edited base as '{keys.BASE_PREVIOUS}' (delete it under Shape Keys if unwanted)")
-    results = [name for name in previous if name != keys.BASE_PREVIOUS]
+    copies = [name for name in previous if keys.is_edited_layout_copy(name)]
+    if copies:
+        notes.append(f"kept your edits of other levels and bands as {', '.join(repr(name) for name in copies)} "
+                     "(delete them under Shape Keys if unwanted)")
+    results = [name for name in previous if name != keys.BASE_PREVIOUS and name not in copies]
     if results:
         notes.append(f"kept the earlier results {', '.join(results)} (delete them under Shape Keys if unwanted)")
     if keys.remove_created_basis(obj) is False:
@@ -151,6 +159,7 @@ def clear(obj) -> list:
 SHOWN_COLORS = "pointscale_colors"  # mesh ID property: the colour attributes before Show Details
 # Every mesh ID property the add-on sets, by its exact name (a copy of the mesh drops them).
 ID_PROPERTIES = (storage.PROP, keys.OWNED, keys.GROUPS, keys.CREATED_BASIS, keys.FOLDS_MARKED, keys.WRITTEN_BASE,
+                 keys.WRITTEN_LAYOUT,
                  SHOWN_COLORS)
 
 

@@ -228,7 +228,11 @@ class POINTSCALE_OT_decompose(RunsInBackground, bpy.types.Operator):
         if keys.BASE_PREVIOUS in kept:
             self.report({"INFO"}, f"Decompose '{obj.name}': your edited base is kept as '{keys.BASE_PREVIOUS}', "
                                   "switched off (the new 'Level 0' is the new decomposition's)")
-        results = [name for name in kept if name != keys.BASE_PREVIOUS]
+        copies = [name for name in kept if keys.is_edited_layout_copy(name)]
+        if copies:
+            self.report({"INFO"}, f"Decompose '{obj.name}': your edits of other levels and bands are kept as "
+                                  f"{', '.join(repr(name) for name in copies)}, switched off")
+        results = [name for name in kept if name != keys.BASE_PREVIOUS and name not in copies]
         if results:
             self.report({"INFO"}, f"Decompose '{obj.name}': the earlier results are kept as "
                                   f"{', '.join(repr(name) for name in results)}, switched off")

@@ -93,6 +93,9 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
             return {"CANCELLED"}
         writeback.show_result(obj, keys.EDIT, result)
         report_folds(self, obj, folds, "Rebuilt the detail")
+        unused = keys.unused_edits_message(mesh, "Rebuilt the detail")
+        if unused:
+            self.report({"WARNING"}, unused)
         self.return_to_mode(obj)
         return {"FINISHED"}
 
@@ -159,6 +162,9 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
                                          "comes back on the next frame and the band applies twice (baked and live): "
                                          "remove the keyframes or driver, or set the slider to 0 in them")
         report_folds(self, obj, folds, f"Baked gains ({_gains_text(values)}){_on_top_text(baked)} into '{keys.FILTER}'")
+        unused = keys.unused_edits_message(mesh, "Bake filter: baked")
+        if unused:
+            self.report({"WARNING"}, unused)
         if kept:
             self.report({"INFO"}, f"Bake filter: the earlier bake, switched off, is kept as "
                                   f"'{keys.FILTER + keys.PREVIOUS}'")

@@ -112,3 +112,56 @@ def test_paint_band_mask_leaves_the_artist_in_their_mode(addon, mode):
     assert bpy.ops.pointscale.paint_band_mask(band=1, enter_paint=False) == {"FINISHED"}
     assert obj.mode == mode and obj.vertex_groups.get("Band 1 mask") is not None
     bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def test_edits_of_other_levels_and_bands_are_said_unused_and_kept(addon, capfd):
+    """Level 1 lifted and Band 1 edited: Rebuild Detail and Bake Filter used neither, without a
+    word, and Decompose again wrote over both."""
+    obj = h.mesh_object(h.noisy_sphere(3000))
+    mesh = obj.data
+    h.decompose(obj, levels=4)
+    level1, band1 = h.key(mesh, "Level 1"), h.key(mesh, "Band 1")
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    assert "not used" not in capfd.readouterr().out  # nothing edited: nothing said
+    lifted = level1.copy()
+    lifted[np.argmax(lifted[:, 2]), 2] += 0.3
+    h.set_key(mesh, "Level 1", lifted)
+    edited_band = band1 * np.float32(1.01)
+    h.set_key(mesh, "Band 1", edited_band)
+    for operator in (bpy.ops.pointscale.rebuild_detail, bpy.ops.pointscale.bake_filter):
+        capfd.readouterr()
+        assert operator() == {"FINISHED"}
+        said = capfd.readouterr().out
+        assert "'Level 1', 'Band 1' were edited since Decompose and are not used" in said, said
+    h.decompose(obj, levels=4)
+    assert np.array_equal(h.key(mesh, "Level 1 (previous)"), lifted)
+    assert np.array_equal(h.key(mesh, "Band 1 (previous)"), edited_band)
+    assert np.array_equal(h.key(mesh, "Level 1"), level1)  # the new decomposition's, as before
+    assert mesh.shape_keys.key_blocks["Level 1 (previous)"].value == 0.0
+    capfd.readouterr()
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    assert "not used" not in capfd.readouterr().out
+    # Clear keeps them too, and the next edit of Level 2 is kept beside them.
+    level2 = h.key(mesh, "Level 2")
+    level2[:, 0] += 0.01
+    h.set_key(mesh, "Level 2", level2)
+    assert bpy.ops.pointscale.clear() == {"FINISHED"}
+    names = set(mesh.shape_keys.key_blocks.keys())
+    assert {"Level 1 (previous)", "Band 1 (previous)", "Level 2 (previous)"} <= names
+    assert not any(name in names for name in ("Level 1", "Band 1", "Level 2"))
+    assert np.array_equal(h.key(mesh, "Level 2 (previous)"), level2)
+
+
+def test_an_edited_level_is_not_kept_over_the_artists_own_key(addon):
+    obj = h.mesh_object(h.noisy_sphere(3000))
+    mesh = obj.data
+    h.decompose(obj, levels=3)
+    level1 = h.key(mesh, "Level 1")
+    level1[:, 2] += 0.01
+    h.set_key(mesh, "Level 1", level1)
+    obj.shape_key_add(name="Level 1 (previous)", from_mix=False)
+    with pytest.raises(RuntimeError, match="'Level 1 \\(previous\\)' of its own"):
+        bpy.ops.pointscale.decompose()
+    with pytest.raises(RuntimeError, match="'Level 1 \\(previous\\)' of its own"):
+        bpy.ops.pointscale.clear()
+    assert np.array_equal(h.key(mesh, "Level 1"), level1)
