@@ -291,6 +291,28 @@ def uneven_scale_message(linear: np.ndarray, name: str) -> str | None:
             "decompose the shape you see")
 
 
+# Modifiers that leave the shape as it is, or that the add-on handles itself (Mirror).
+_SHAPE_KEEPING_MODIFIERS = {"MIRROR", "ARMATURE", "DATA_TRANSFER", "UV_PROJECT", "UV_WARP", "VERTEX_WEIGHT_EDIT",
+                            "VERTEX_WEIGHT_MIX", "VERTEX_WEIGHT_PROXIMITY", "WEIGHTED_NORMAL", "NORMAL_EDIT",
+                            "TRIANGULATE", "NODES", "PARTICLE_SYSTEM", "COLLISION", "SOFT_BODY", "CLOTH", "MESH_CACHE",
+                            "MESH_SEQUENCE_CACHE", "SURFACE", "DYNAMIC_PAINT", "OCEAN", "EXPLODE", "FLUID",
+                            "PARTICLE_INSTANCE"}
+
+
+def unapplied_modifiers_message(modifiers, name: str) -> str | None:
+    """What to tell the artist when modifiers shown in the viewport change the shape the
+    decomposition does not see: ``modifiers`` are (name, type) pairs of the enabled ones. The
+    engine reads the mesh's own vertices (the Basis), as it reads them under an unapplied scale.
+    Animation and simulation modifiers, Geometry Nodes (which may do anything) and Mirror (read
+    by the add-on itself) are not named."""
+    shaping = [f"'{m}'" for m, kind in modifiers if kind not in _SHAPE_KEEPING_MODIFIERS]
+    if not shaping:
+        return None
+    return (f"'{name}' is shown through modifiers that change its shape ({', '.join(shaping)}): the decomposition "
+            "works on the mesh's own vertices, so Level 0 and the bands follow the shape without them. Apply them "
+            "first to decompose the shape you see")
+
+
 def loose_vertices_message(n_vertices: int, edges: np.ndarray) -> str | None:
     """With Keep Parts Apart, vertices in no edge join the part of their nearest vertex and are
     smoothed with it (a scan's untriangulated points): say how many, since helper vertices then

@@ -81,6 +81,8 @@ def _prepare(op, context):
             kwargs["edges"] = mesh_io.read_edges(mesh)
             op._input_notes.append(compute.logic.loose_vertices_message(len(points), kwargs["edges"]))
         op._input_notes.append(compute.logic.uneven_scale_message(np.array(obj.matrix_world)[:3, :3], obj.name))
+        op._input_notes.append(compute.logic.unapplied_modifiers_message(
+            [(m.name, m.type) for m in obj.modifiers if m.show_viewport], obj.name))
         # A mesh too small for the levels asked gets the levels it supports, and is told how to
         # get the rest; the panel's setting stays as the artist set it. With Keep Parts Apart
         # its largest part is what has to support them: found here for a mesh too small as a

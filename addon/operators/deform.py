@@ -153,7 +153,7 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
         if self.reset_bands:
             for l in range(k):
                 kb = keys.get(mesh, keys.band_name(l))
-                if kb is not None:
+                if kb is not None and not kb.mute:  # a muted band was not baked: its setting stays
                     kb.value = 0.0
             animated = [keys.band_name(l) for l in range(k) if _value_animated(mesh, keys.band_name(l))]
             if animated:  # their keyframes or drivers set the value again on the next frame

@@ -165,3 +165,32 @@ def test_an_edited_level_is_not_kept_over_the_artists_own_key(addon):
     with pytest.raises(RuntimeError, match="'Level 1 \\(previous\\)' of its own"):
         bpy.ops.pointscale.clear()
     assert np.array_equal(h.key(mesh, "Level 1"), level1)
+
+
+def test_a_bake_leaves_a_muted_bands_setting_as_it_was(addon):
+    """The bake rightly left a muted band out, but set its slider back to gain 1 (3 was lost)."""
+    obj = h.mesh_object(h.noisy_sphere(3000))
+    mesh = obj.data
+    h.decompose(obj, levels=3)
+    mesh.multiscale.bands[0].gain = 0.5
+    mesh.multiscale.bands[1].gain = 3.0
+    mesh.shape_keys.key_blocks["Band 1"].mute = True
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    assert mesh.multiscale.bands[0].gain == pytest.approx(1.0)
+    assert mesh.multiscale.bands[1].gain == pytest.approx(3.0)
+
+
+def test_modifiers_that_change_the_shape_are_named_at_decompose(addon, capfd):
+    """An unapplied Displace made the bumps in the viewport; Decompose worked on the smooth mesh
+    without a word (it warns of an unapplied non-uniform scale)."""
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=5)
+    obj = bpy.context.active_object
+    obj.modifiers.new("Bumps", "DISPLACE")
+    obj.modifiers.new("Weights", "VERTEX_WEIGHT_EDIT")
+    capfd.readouterr()
+    h.decompose(obj, levels=3)
+    out = capfd.readouterr().out
+    assert "modifiers that change its shape ('Bumps')" in out, out
+    obj.modifiers["Bumps"].show_viewport = False
+    h.decompose(obj, levels=3)
+    assert "modifiers that change its shape" not in capfd.readouterr().out
