@@ -10,10 +10,9 @@ from pathlib import Path
 import numpy as np
 
 from .. import Mirror, decompose, io, reconstruct, shapes
-from ..folds import with_folds
-from ..multiscale import _base_array
 from .folder import DECOMPOSITION_FILE, SOURCE_FILE, level_name, read_decomposition
-from .level_files import FORMATS_WITH_VERTEX_SCALARS, finest_normals, level_scan, reconstruct_with_normals
+from .level_files import (FORMATS_WITH_VERTEX_SCALARS, ResultOverflow, finest_normals, level_scan,
+                          reconstruct_with_normals)
 from .output_checks import (check_format_holds, check_input_kept, check_output_file, check_output_folder, read_base,
                             require_writable_folder, writable_extension)
 from .progress import CommandProgress
@@ -240,12 +239,12 @@ def cmd_reconstruct(args) -> None:
         template = source if source is not None else io.Scan(points=dec.base)
         check_format_holds(out.suffix.lower(), template, args.decomposition, points=dec.base, shown=out)
         base = read_base(args.base, dec.n_points, source, dec.base, args.threads) if args.base else None
-        points, reference = reconstruct_with_normals(dec, gains, base, args.threads, progress.stage("reconstructing"))
-        if not np.isfinite(points).all():
-            raise ValueError(f"--gains {args.gains} overflow: the result has infinite coordinates")
-        folds = None
-        if args.folds != "ignore":
-            points, folds = with_folds(dec, points, _base_array(dec, base), args.folds, args.fold_reference)
+        try:
+            points, reference, folds = reconstruct_with_normals(dec, gains, base, args.threads,
+                                                                progress.stage("reconstructing"), args.folds,
+                                                                args.fold_reference)
+        except ResultOverflow:
+            raise ValueError(f"--gains {args.gains} overflow: the result has infinite coordinates") from None
         progress.stage("normals")
         # Unedited at unit gains, with nothing limited, the result is the input: its own normals.
         as_input = (args.base is None and (gains is None or np.all(np.asarray(gains) == 1.0))

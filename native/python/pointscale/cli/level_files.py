@@ -22,13 +22,26 @@ def finest_normals(points: np.ndarray, reference: np.ndarray, threads: int) -> n
     return normals
 
 
-def reconstruct_with_normals(dec, gains, base, threads: int, progress):
-    """(finest level (n, 3), normals (n, 3) of the level below it) of reconstruct(dec, gains, base):
-    the same points, plus what finest_normals() orients the result's normals by."""
-    from ..multiscale import _base_array, _gains_array
-    levels, normals = dec._reconstruct(_gains_array(dec, gains), _base_array(dec, base), keep_levels=True,
-                                       progress=progress, threads=thread_option(threads))
-    return levels[-1], normals[-1]
+class ResultOverflow(ValueError):
+    """Gains so large that the result has infinite coordinates."""
+
+
+def reconstruct_with_normals(dec, gains, base, threads: int, progress, folds: str = "ignore",
+                             fold_reference: str = "input"):
+    """(finest level (n, 3), normals (n, 3) of the level below it, Folds or None) of
+    reconstruct(dec, gains, base, folds=..., fold_reference=...): the same points, plus what
+    finest_normals() orients the result's normals by. Of a mirrored decomposition, the half's
+    (the core rebuilds the whole model). ResultOverflow when the gains overflow."""
+    from ..multiscale import _base_array, _gains_array, _result_with_folds
+    b = _base_array(dec, base)
+    levels, normals = dec._reconstruct(_gains_array(dec, gains), b, keep_levels=True, progress=progress,
+                                       threads=thread_option(threads))
+    if not np.isfinite(levels[-1]).all():
+        raise ResultOverflow("the result has infinite coordinates")
+    result = _result_with_folds(dec, levels[-1], b, folds, fold_reference)
+    points, found = (result, None) if folds == "ignore" else result
+    below = normals[-1] if dec._mirror is None else dec._mirror.symmetric_normals(normals[-1])
+    return points, below, found
 
 
 def free_names(scan, names: tuple[str, ...]) -> tuple[str, ...]:
