@@ -63,3 +63,29 @@ def test_a_pts_count_line_that_disagrees_is_still_refused_after_comments(tmp_pat
     (tmp_path / "scan.pts").write_text(text)
     with pytest.raises(ValueError, match="says 600 points, the file has 500"):
         io.read(tmp_path / "scan.pts")
+
+
+@pytest.mark.parametrize("above", [["# EPSG:25832"], ["// exported by a scanner", "# CRS: EPSG:32633"]])
+def test_an_xyz_header_below_other_comment_lines_names_the_columns(tmp_path, above):
+    """'# EPSG:25832' above '//X Y Z R G B Nx Ny Nz': the header was taken for a plain comment,
+    the colours and normals became float64 column_3 .. column_8, and decompose estimated normals
+    of its own."""
+    rng = np.random.default_rng(7)
+    points = rng.uniform(-3, 3, (900, 3)) + [300000.0, 5000000.0, 40.0]
+    normals = rng.normal(size=(900, 3))
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    colours = rng.integers(0, 256, (900, 3))
+    path = tmp_path / "cloud.xyz"
+    with open(path, "w") as f:
+        f.write("\n".join(above) + "\n//X Y Z R G B Nx Ny Nz\n")
+        for p, c, n in zip(points, colours, normals):
+            f.write(f"{p[0]:.17g} {p[1]:.17g} {p[2]:.17g} {c[0]} {c[1]} {c[2]} {n[0]:.17g} {n[1]:.17g} {n[2]:.17g}\n")
+    scan = io.read(path)
+    assert np.array_equal(scan.points, points) and np.array_equal(scan.normals, normals)
+    assert sorted(scan.vertex_attributes) == ["blue", "green", "red"]
+    assert scan.vertex_attributes["red"].dtype == np.uint8
+    assert scan.format_info["comments"] == [line.lstrip("#/ ") for line in above]
+    io.write(tmp_path / "back.xyz", scan)
+    again = io.read(tmp_path / "back.xyz")
+    assert again.format_info["comments"] == scan.format_info["comments"]
+    assert np.array_equal(again.vertex_attributes["green"], scan.vertex_attributes["green"])

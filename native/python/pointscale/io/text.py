@@ -1,9 +1,9 @@
 """XYZ and PTS: whitespace-separated text, one point a line.
 
-.xyz  x y z [nx ny nz] [more columns]. A first line "# x y z nx ny nz red:u1 ..." (what write_xyz
-      puts there when the scan has attributes; "//X Y Z R G B" from CloudCompare works too)
-      names the columns and gives their dtypes; without it (or when the first comment does not
-      name every column, starting with x y z), columns 4-6 are normals when every row of them has unit length, and other
+.xyz  x y z [nx ny nz] [more columns]. A comment line "# x y z nx ny nz red:u1 ..." at the top
+      (what write_xyz puts first when the scan has attributes; "//X Y Z R G B" from CloudCompare
+      works too, also below other comment lines such as a CRS) names the columns and gives their
+      dtypes; without it (or when no comment names every column, starting with x y z), columns 4-6 are normals when every row of them has unit length, and other
       columns are kept as float64 attributes column_3, column_4, ... Columns declared as 64-bit
       integers (id:u8, id:i8) are read and written exactly, not through float64; a header that
       names a column twice is refused. Only float (or undeclared) nx ny nz are normals, wherever
@@ -45,7 +45,10 @@ _PTS_COLUMNS = {3: (), 4: ("intensity",), 6: ("red", "green", "blue"), 7: ("inte
 def read_xyz(path) -> Scan:
     path = os.fspath(path)
     comments, rows = _load(path, skip_first=False)
-    header = comments[0] if comments else None
+    # The header is the comment line that names the columns, wherever it stands among the
+    # comments at the top (a CRS line above it, as some exports write); else the first one.
+    naming = [c for c in comments if _names_columns(c, rows.shape[1])]
+    header = naming[0] if naming else comments[0] if comments else None
     names_given = header is not None and _names_columns(header, rows.shape[1])
     if names_given:
         names, dtypes = _parse_header(header, rows.shape[1], path)
@@ -61,7 +64,7 @@ def read_xyz(path) -> Scan:
     if names_given:
         _name_colour_columns(names, dtypes, rows, declared)
     info = {"format": "xyz", "header": bool(names_given)}
-    kept = [c for c in comments[1 if names_given else 0:] if c]
+    kept = [c for c in comments if c and not (names_given and c is header)]
     if kept:  # a CRS, the scanner, the date: written back as comment lines (write_xyz), and into PLY
         info["comments"] = kept
     return _scan(path, rows, names, dtypes, info, exact)
