@@ -133,6 +133,7 @@ def read_base(path: str, n_points: int, source, stored=None, threads: int = 0):
     if base.n_points != n_points:
         raise ValueError(f"--base {path} has {base.n_points} points; the decomposition has {n_points} "
                          "(edit level_0 without adding or removing vertices)")
+    base = _in_input_order(base, source)
     if source is not None and source.n_faces and base.n_faces and not _same_faces(base.faces, source.faces):
         raise ValueError(f"--base {path} has other faces than the decomposed input: its vertices are "
                          "not in the input's order (edit a level file in a format that keeps vertex order, "
@@ -140,6 +141,25 @@ def read_base(path: str, n_points: int, source, stored=None, threads: int = 0):
     if stored is not None:
         _warn_if_reordered(path, base.points, stored, threads)
     return base.points
+
+
+def _in_input_order(base, source):
+    """An E57 level file of an input whose scans (scan_id) were interleaved or out of order
+    lists the points scan by scan (io.e57, which warns when it writes one): put back in the
+    input's order, which it tells by the scans it reads back; anything else as it is."""
+    ids = None if source is None else source.vertex_attributes.get("scan_id")
+    if base.format_info.get("format") != "e57" or ids is None:
+        return base
+    ids = np.asarray(ids)
+    if ids.ndim != 1 or len(ids) != base.n_points or np.all(np.diff(ids.astype(np.int64)) >= 0):
+        return base
+    order = np.argsort(ids, kind="stable")  # the file's point r is the input's point order[r]
+    read = base.vertex_attributes.get("scan_id")
+    if read is None or not np.array_equal(np.asarray(read), np.unique(ids, return_inverse=True)[1][order]):
+        return base  # not listed as pointscale writes it: the checks below judge it
+    points = np.empty_like(base.points)
+    points[order] = base.points
+    return base.with_geometry(points, None)
 
 
 #: The median stretch of the edges between nearest neighbours, beyond the stretch of the whole

@@ -134,6 +134,11 @@ def write_e57(path, scan: Scan) -> None:
                       f"only; {', '.join(dropped)} not written", stacklevel=3)
     if stations is None:
         stations = [(np.arange(scan.n_points), None)]
+    elif np.any(np.diff(np.concatenate([which for which, _ in stations])) != 1):
+        warnings.warn(f"{path}: E57 holds each scan's points together, and here the scans' points (scan_id) are "
+                      "interleaved or out of order: the file lists them scan by scan, in another order than the "
+                      "scan's (pointscale reconstruct --base puts a level file of this kind back in its "
+                      "decomposition's order; other tools pair points by their order)", stacklevel=3)
     with atomic_write(path) as temporary:
         os.unlink(temporary)  # libE57 refuses to open an existing file for writing
         try:
