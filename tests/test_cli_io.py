@@ -379,8 +379,16 @@ def test_a_base_whose_vertices_were_renumbered_is_refused(tmp_path):
     io.write(tmp_path / "edited.stl", level0)
     msg = one_line_error(run("reconstruct", str(tmp_path / "out"), "--base", str(tmp_path / "edited.stl"), "-o",
                              str(tmp_path / "r.ply")))
-    assert "other faces" in msg and not (tmp_path / "r.ply").exists()
-    # The same level in a format that keeps the order is taken, and gives back the input.
+    assert "its vertices look renumbered" in msg and not (tmp_path / "r.ply").exists()
+    # The same level in a format that keeps the order is taken, and gives back the input; so is
+    # one whose faces were flipped, reordered or partly deleted (MeshLab's Invert Faces
+    # Orientation, a cleanup): refused before as "its vertices are not in the input's order".
+    faces = level0.faces[np.random.default_rng(5).permutation(len(level0.faces))[:-40], ::-1]
+    io.write(tmp_path / "flipped.ply", io.Scan(points=level0.points, faces=faces))
+    done = run("reconstruct", str(tmp_path / "out"), "--base", str(tmp_path / "flipped.ply"), "-o",
+               str(tmp_path / "f.ply"))
+    assert done.returncode == 0, done.stderr
+    assert np.abs(read_ply(tmp_path / "f.ply").points - mesh.vertices[order]).max() < 1e-9
     done = run("reconstruct", str(tmp_path / "out"), "--base", str(tmp_path / "out" / "level_0.ply"), "-o",
                str(tmp_path / "r.ply"))
     assert done.returncode == 0, done.stderr

@@ -134,10 +134,13 @@ def read_base(path: str, n_points: int, source, stored=None, threads: int = 0):
         raise ValueError(f"--base {path} has {base.n_points} points; the decomposition has {n_points} "
                          "(edit level_0 without adding or removing vertices)")
     base = _in_input_order(base, source)
-    if source is not None and source.n_faces and base.n_faces and not _same_faces(base.faces, source.faces):
-        raise ValueError(f"--base {path} has other faces than the decomposed input: its vertices are "
-                         "not in the input's order (edit a level file in a format that keeps vertex order, "
-                         "such as PLY)")
+    if source is not None and source.n_faces and base.n_faces:
+        shared = _share_of_faces_kept(base.faces, source.faces)
+        if shared < FACES_KEPT:
+            raise ValueError(f"--base {path}: only {shared:.0%} of its faces join the same vertices as the decomposed "
+                             "input's, so its vertices look renumbered, which would pair each vertex with another's "
+                             "detail (STL, for one, renumbers them on reading: edit a level file in a format that "
+                             "keeps vertex order, such as PLY)")
     if stored is not None:
         _warn_if_reordered(path, base.points, stored, threads)
     return base.points
@@ -193,9 +196,20 @@ def _warn_if_reordered(path: str, base: np.ndarray, stored: np.ndarray, threads:
                       "that keep the vertex order, such as PLY)")
 
 
-def _same_faces(a, b) -> bool:
-    if isinstance(a, np.ndarray) and isinstance(b, np.ndarray):
-        return a.shape == b.shape and np.array_equal(a, b)
-    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
-        return False
-    return len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b))
+#: The share of an edited base's faces that must join the same vertices as the input's faces do.
+#: Renumbered vertices (STL's reading) keep almost none; faces flipped, reordered, deleted or
+#: added around a hole keep nearly all.
+FACES_KEPT = 0.5
+
+
+def _face_keys(faces) -> set:
+    """Each face as its sorted vertex indices (its winding, first vertex and place ignored)."""
+    if isinstance(faces, np.ndarray):
+        return set(map(tuple, np.sort(faces, axis=1).tolist()))
+    return {tuple(sorted(int(v) for v in face)) for face in faces}
+
+
+def _share_of_faces_kept(base_faces, source_faces) -> float:
+    """The share of base_faces that are faces of the source, as vertex sets."""
+    base = _face_keys(base_faces)
+    return len(base & _face_keys(source_faces)) / max(len(base), 1)
