@@ -113,3 +113,19 @@ def test_e57_level_files_of_interleaved_scans_come_back_in_order_as_base(tmp_pat
     back = io.read(tmp_path / "back.ply").points
     # E57 stores float32 coordinates about each scan's centre: the base comes back to ~1e-6.
     assert np.abs(back - points).max() < 1e-4
+
+
+def test_obj_negative_indices_count_back_from_the_lines_above_the_face(tmp_path):
+    """Relative indices (f -3 -2 -1 after each object's own v lines, as exporters writing object
+    by object do) counted back from the end of the file: both triangles became [3, 4, 5]."""
+    text = ("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\nf -3/-3/-1 -2/-2/-1 -1/-1/-1\n"
+            "v 5 0 0\nv 6 0 0\nv 5 1 0\nv 5 1 1\nvt 0.5 0.5\nvt 1 1\nvt 0 0.5\nvt 0.2 0.2\nvn 1 0 0\n"
+            "f -4/-4/-1 -3/-3/-1 -2/-2/-1 -1/-1/-1\nf 1 2 -1\n")
+    (tmp_path / "relative.obj").write_text(text.replace("f 1 2 -1\n", ""))
+    scan = io.read(tmp_path / "relative.obj")
+    assert [list(f) for f in scan.faces] == [[0, 1, 2], [3, 4, 5, 6]]
+    assert np.array_equal(scan.normals, [[0, 0, 1]] * 3 + [[1, 0, 0]] * 4)
+    assert np.array_equal(scan.vertex_attributes["texture_u"], [0, 1, 0, 0.5, 1, 0, 0.2])
+    (tmp_path / "bad.obj").write_text("v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n")
+    with pytest.raises(ValueError, match=r"vertex -3, outside 1..3 \(or -2..-1, counted back from the vertices above"):
+        io.read(tmp_path / "bad.obj")

@@ -48,7 +48,7 @@ def read_obj(path) -> Scan:
     attributes = {name: v[:, 3 + i].copy() for i, name in enumerate(_V_EXTRAS[v.shape[1]])}
     vn = numbers(lines["vn"], "vn", path)
     vt = numbers(lines["vt"], "vt", path)
-    faces, corner_vt, corner_vn = _faces(lines["f"], len(v), len(vt), len(vn), path)
+    faces, corner_vt, corner_vn = _faces(lines["f"], len(v), len(vt), len(vn), path, lines["seen"])
     normals = _per_vertex(vn[:, :3] if len(vn) else vn, faces, corner_vn, len(v), "normals", path)
     if vt.shape[1] > len(_TEXTURE_NAMES):
         raise ValueError(f"{path}: vt lines have {vt.shape[1]} values; expected u [v [w]]")
@@ -114,21 +114,26 @@ def _vertex_extras(scan: Scan) -> tuple:
 def _lines(path: str) -> dict:
     text = read_text(path, "a text OBJ file")
     lines = {"v": [], "vt": [], "vn": [], "f": []}
+    seen = []  # per f line: the v, vt and vn lines above it, which its negative indices count back from
     others = {}
     for line in text.splitlines():
         parts = line.split(None, 1)
         if parts and parts[0] in lines:
             lines[parts[0]].append(parts[1].split("#", 1)[0] if len(parts) > 1 else "")
+            if parts[0] == "f":
+                seen.append((len(lines["v"]), len(lines["vt"]), len(lines["vn"])))
         elif parts and not parts[0].startswith("#"):
             others[parts[0]] = others.get(parts[0], 0) + 1
     if others:  # materials (mtllib, usemtl), groups, objects, smoothing, lines, points...
         said = ", ".join(f"{count} {keyword}" for keyword, count in others.items())
         warnings.warn(f"{path}: OBJ lines other than v, vt, vn and f are not kept ({said})", stacklevel=4)
+    lines["seen"] = np.array(seen, dtype=np.int64).reshape(-1, 3)
     return lines
 
 
-def _faces(face_lines: list, nv: int, nvt: int, nvn: int, path: str):
-    """(faces, vt index per corner or None, vn index per corner or None), 0-based."""
+def _faces(face_lines: list, nv: int, nvt: int, nvn: int, path: str, seen: np.ndarray):
+    """(faces, vt index per corner or None, vn index per corner or None), 0-based. seen: per
+    face line, the v, vt and vn lines above it."""
     if not face_lines:
         return None, None, None
     lengths = np.array([len(line.split()) for line in face_lines])
@@ -152,15 +157,19 @@ def _faces(face_lines: list, nv: int, nvt: int, nvn: int, path: str):
         if double and j == 1:
             columns.append(None)
             continue
-        # OBJ indices are 1-based; negative ones count back from the end.
+        # OBJ indices are 1-based; negative ones count back from the last of its kind defined
+        # above the face (relative indices, as exporters that write object by object use them).
         written = column
-        column = np.where(written < 0, written + count, written - 1)
+        above = np.repeat(seen[:, j], lengths)
+        column = np.where(written < 0, written + above, written - 1)
         bad = (column < 0) | (column >= count)
         if bad.any():  # name the index as the file writes it, the first one out of range
             what = ("vertex", "texture coordinate", "normal")[j]
-            first = int(written[np.argmax(bad)])
-            allowed = (f"outside 1..{count} (or -{count}..-1, counted back from the end)" if count
-                       else f"but the file has no {what}s")
+            at = int(np.argmax(bad))
+            first = int(written[at])
+            many = ("vertices", "texture coordinates", "normals")[j]
+            allowed = (f"outside 1..{count} (or -{int(above[at])}..-1, counted back from the {many} above the face)"
+                       if count else f"but the file has no {many}")
             raise ValueError(f"{path}: a face refers to {what} {first}, {allowed}")
         columns.append(column)
     columns += [None] * (3 - len(columns))
