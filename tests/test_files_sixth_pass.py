@@ -129,3 +129,22 @@ def test_obj_negative_indices_count_back_from_the_lines_above_the_face(tmp_path)
     (tmp_path / "bad.obj").write_text("v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n")
     with pytest.raises(ValueError, match=r"vertex -3, outside 1..3 \(or -2..-1, counted back from the vertices above"):
         io.read(tmp_path / "bad.obj")
+
+
+@pytest.mark.parametrize("offset, said", [((300000.0, 5000000.0, 40.0), True), ((0.0, 0.0, 0.0), False)])
+def test_a_single_precision_base_of_a_far_off_model_is_warned_of(tmp_path, offset, said):
+    """level_0 re-saved as float32 (what MeshLab and Blender write) of a georeferenced cloud was
+    taken without a word, and moved the result by 0.09-0.15 on a model of radius 10."""
+    rng = np.random.default_rng(2)
+    d = rng.normal(size=(6000, 3))
+    points = d / np.linalg.norm(d, axis=1)[:, None] * [6.0, 4.0, 3.0] + offset
+    io.write(tmp_path / "cloud.ply", io.Scan(points=points))
+    assert run_cli("decompose", str(tmp_path / "cloud.ply"), "-o", str(tmp_path / "dec"), "--levels", "3").returncode == 0
+    level0 = io.read(tmp_path / "dec" / "level_0.ply")
+    for precision, name in ((np.float32, "single.ply"), (np.float64, "double.ply")):
+        io.write(tmp_path / name, io.Scan(points=level0.points, precision=precision))
+        done = run_cli("reconstruct", str(tmp_path / "dec"), "--base", str(tmp_path / name), "-o",
+                       str(tmp_path / f"out_{name}"))
+        assert done.returncode == 0, done.stderr
+        warned = "holds single-precision (float32) coordinates" in done.stderr
+        assert warned == (said and precision == np.float32), (name, done.stderr)

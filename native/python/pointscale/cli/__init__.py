@@ -44,7 +44,7 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
     same warning for every level is shown once, without the name."""
     text = _in_cli_words(_one_line(message))
     head, _, rest = text.partition(": ")
-    if rest and ("/" in head or "\\" in head):
+    if rest and ("/" in head or "\\" in head) and not head.startswith("--"):  # "--base path: ..." keeps its subject
         text = rest
     if text not in _warned:
         _warned.add(text)

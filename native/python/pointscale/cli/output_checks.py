@@ -134,6 +134,8 @@ def read_base(path: str, n_points: int, source, stored=None, threads: int = 0):
         raise ValueError(f"--base {path} has {base.n_points} points; the decomposition has {n_points} "
                          "(edit level_0 without adding or removing vertices)")
     base = _in_input_order(base, source)
+    if stored is not None:
+        _warn_if_single_precision_rounds(path, base, source, stored)
     if source is not None and source.n_faces and base.n_faces:
         shared = _share_of_faces_kept(base.faces, source.faces)
         if shared < FACES_KEPT:
@@ -144,6 +146,27 @@ def read_base(path: str, n_points: int, source, stored=None, threads: int = 0):
     if stored is not None:
         _warn_if_reordered(path, base.points, stored, threads)
     return base.points
+
+
+#: Rounding of a single-precision base, as a share of the model's size, beyond which it is said:
+#: a model near the origin rounds by about 3e-8 of its size; one far from it (georeferenced),
+#: by far more.
+SINGLE_PRECISION_SAID = 1e-6
+
+
+def _warn_if_single_precision_rounds(path: str, base, source, stored: np.ndarray) -> None:
+    """A base saved in single precision (what MeshLab and Blender write) of a decomposition
+    in double: far from the origin its rounding moves every point, and the detail with it."""
+    double = source is None or np.dtype(source.precision) == np.float64
+    if np.dtype(base.precision) != np.float32 or not double:
+        return
+    size = float(np.linalg.norm(np.ptp(stored, axis=0)))
+    rounding = float(np.abs(base.points).max()) * 2.0 ** -24
+    if size > 0.0 and rounding > SINGLE_PRECISION_SAID * size:
+        warnings.warn(f"--base {path} holds single-precision (float32) coordinates and the decomposition double; "
+                      f"this far from the origin float32 rounds them by up to {rounding:.2g} ({rounding / size:.1e} of "
+                      "the model's size), and every point of the result moves with it. Save the edited level 0 in "
+                      "double precision (as level_0 was written)")
 
 
 def _in_input_order(base, source):
