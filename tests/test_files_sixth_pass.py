@@ -148,3 +148,23 @@ def test_a_single_precision_base_of_a_far_off_model_is_warned_of(tmp_path, offse
         assert done.returncode == 0, done.stderr
         warned = "holds single-precision (float32) coordinates" in done.stderr
         assert warned == (said and precision == np.float32), (name, done.stderr)
+
+
+def test_cloudcompare_field_names_fill_the_standard_las_fields(tmp_path):
+    """'//X Y Z Intensity Classification ReturnNumber' went to extra bytes of those names, and
+    the LAS intensity and classification a reader shows were all 0, without a word."""
+    laspy = pytest.importorskip("laspy")
+    rng = np.random.default_rng(3)
+    points = rng.uniform(0, 50, (800, 3)) + [600000.0, 4500000.0, 0.0]
+    intensity, classes, returns = rng.integers(0, 65536, 800), rng.integers(0, 32, 800), rng.integers(1, 6, 800)
+    with open(tmp_path / "cc.xyz", "w") as f:
+        f.write("//X Y Z Intensity Classification Return_Number Own_Field\n")
+        for p, i, c, r in zip(points, intensity, classes, returns):
+            f.write(f"{p[0]:.3f} {p[1]:.3f} {p[2]:.3f} {i} {c} {r} 0.5\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        io.write(tmp_path / "out.las", io.read(tmp_path / "cc.xyz"))
+    las = laspy.read(tmp_path / "out.las")
+    assert np.array_equal(las.intensity, intensity) and np.array_equal(las.classification, classes)
+    assert np.array_equal(las.return_number, returns)
+    assert list(las.point_format.extra_dimension_names) == ["Own_Field"]

@@ -11,6 +11,8 @@ A Scan from another format is written as LAS 1.4, point format 7 when it has red
 (8-bit colours are scaled by 257 to LAS's 16 bits) and 6 otherwise; the offset is the bounding
 box minimum and the scale the power of ten at or below 1e-6 of the bounding box diagonal, so
 coordinates are kept to half of that (e.g. 1e-7 m for a 0.3 m scan, 1 mm for a 2 km site).
+Attributes named as a standard field but for case, spaces or underscores (CloudCompare's
+Intensity, Classification, ReturnNumber) fill that field, and are read back under its name.
 Other attributes become extra bytes with their own dtype.
 """
 from __future__ import annotations
@@ -200,12 +202,18 @@ def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy):
         for i, name in enumerate(NORMAL_NAMES):
             attributes[name] = scan.normals[:, i].astype(info.get("normal_type", "f4"))
     foreign = not info
+    if foreign:
+        attributes = _standard_names(attributes, standard)
     for name, column in attributes.items():
         column = np.asarray(column)
         if name in standard:
             if foreign and name in _COLOURS and column.dtype == np.uint8:
                 column = column.astype(np.uint16) * 257  # 8-bit to LAS's 16-bit colour, 255 -> 65535
             if _fits(column, standard[name]):
+                dimension = standard[name]
+                if column.dtype.kind == "f" and (dimension.dtype is None or np.dtype(dimension.dtype).kind != "f"):
+                    # whole numbers read as floats (a text file's columns) into an integer or bit field
+                    column = column.astype(np.uint8 if dimension.dtype is None else dimension.dtype)
                 values[name] = column
                 continue
             warnings.warn(f"attribute {name!r} ({column.dtype}) does not fit the LAS field; kept as extra "
@@ -237,6 +245,26 @@ def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy):
             raise ValueError(f"attribute {p.name!r} is longer than the 32 bytes a LAS extra-bytes name holds: "
                              "rename it, or write a format that keeps it (.ply)")
     return values, params
+
+
+def _plain(name: str) -> str:
+    return name.lower().replace("_", "").replace(" ", "")
+
+
+def _standard_names(attributes: dict, standard: dict) -> dict:
+    """Attributes of another format under LAS's standard field names where theirs differ only
+    in case, spaces or underscores (CloudCompare's XYZ names Intensity, Classification,
+    ReturnNumber...), and the field is not given under its own name too: written into the
+    standard fields, as a LAS reader expects them, and read back under those names."""
+    by_plain = {_plain(name): name for name in standard}
+    out = {}
+    for name, column in attributes.items():
+        field = by_plain.get(_plain(name))
+        if field is not None and field != name and field not in attributes and field not in out:
+            out[field] = column
+        else:
+            out[name] = column
+    return out
 
 
 def _declared_type_holds(column: np.ndarray, declared: dict) -> bool:
