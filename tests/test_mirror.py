@@ -1,5 +1,7 @@
 """Mirror symmetry (issue 17, requirement 4): decompose(points, mirror=...) of a half model is
 exactly symmetric, and points on the mirror plane stay on it at every level and with any edit."""
+import warnings
+
 import numpy as np
 import pytest
 
@@ -247,7 +249,22 @@ def test_a_mirror_plane_far_from_the_half_is_said_so():
     with pytest.raises(ValueError) as refused:
         ps.decompose(half, 3, mirror=ps.Mirror("x", origin=(-1e6, 0, 0)), threads=1)
     message = str(refused.value)
-    assert message.startswith("the x mirror plane (x = -1e+06) lies 1e+06 from the half"), message
+    assert message.startswith("the x mirror plane (x = -1000000) lies 1e+06 from the half"), message
     assert "check Mirror's origin" in message
     with pytest.raises(ValueError, match="^points are collinear"):  # a half that is a line is still said so
         ps.decompose(np.c_[np.linspace(1, 2, 50), np.zeros(50), np.zeros(50)], 2, mirror="x", threads=1)
+
+
+def test_a_half_far_from_its_mirror_plane_is_warned_of():
+    """A georeferenced half mirrored about x = 0 (its origin forgotten) was decomposed as two
+    copies a million units apart without a word."""
+    rng = np.random.default_rng(8)
+    d = rng.normal(size=(4000, 3))
+    half = d / np.linalg.norm(d, axis=1)[:, None] * [20.0, 30.0, 10.0]
+    half = half[half[:, 0] >= 0] + [512000.125, 4100000.5, 80.0]
+    with pytest.warns(UserWarning, match=r"no point lies within 512000 of the x mirror plane \(x = 0\)"):
+        ps.decompose(half, 3, mirror="x")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the plane through the seam: nothing to say
+        dec = ps.decompose(half, 3, mirror=ps.Mirror("x", origin=(512000.125, 0.0, 0.0)))
+    assert dec.mirror.origin[0] == 512000.125

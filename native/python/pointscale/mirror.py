@@ -223,6 +223,12 @@ class Symmetry:
         return {"mirror_seam": self.on_plane.astype(np.uint8)}
 
 
+#: The gap between a half and its mirror plane, as a share of the half's diagonal, beyond which
+#: the plane is said to be far: a half model reaches its plane (a scan's hole along the seam
+#: leaves a few percent).
+FAR_FROM_PLANE = 0.1
+
+
 def symmetry_of(points: np.ndarray, mirror: Mirror) -> Symmetry:
     """The seam points of the half `points`, checked: every point not on a plane lies on one
     side of it."""
@@ -235,7 +241,7 @@ def symmetry_of(points: np.ndarray, mirror: Mirror) -> Symmetry:
         offset = points[:, axis] - mirror.origin[axis]
         on_plane[:, p] = np.abs(offset) <= seam
         below, above = int((offset < -seam).sum()), int((offset > seam).sum())
-        name, at = mirror.axes[p], f"{mirror.axes[p]} = {mirror.origin[axis]:.6g}"
+        name, at = mirror.axes[p], f"{mirror.axes[p]} = {mirror.origin[axis]:.10g}"
         if below and above:
             reach = float(min(-offset.min(), offset.max()))
             raise ValueError(f"points lie on both sides of the {name} mirror plane ({at}): {below} below and "
@@ -245,6 +251,12 @@ def symmetry_of(points: np.ndarray, mirror: Mirror) -> Symmetry:
             raise ValueError(f"all points lie on the {name} mirror plane ({at}, seam tolerance {seam:.3g}): "
                              "there is no half to mirror")
         sides.append(1 if above else -1)
+        gap = float(np.abs(offset).min())
+        if gap > FAR_FROM_PLANE * diagonal:
+            warnings.warn(f"no point lies within {gap:.6g} of the {name} mirror plane ({name} = "
+                          f"{mirror.origin[axis]:.10g}), {gap / diagonal:.0%} of the half's size: a half reaches its "
+                          "plane, so its reflection is a separate copy here. Is the plane's origin given (Mirror's "
+                          "origin, --mirror-origin)? A georeferenced half's plane is far from 0", stacklevel=3)
     return Symmetry(mirror, on_plane, sides)
 
 
@@ -299,7 +311,7 @@ def _far_plane_error(exc: ValueError, half: np.ndarray, symmetry: Symmetry) -> V
     gaps = [float(np.abs(half[:, axis] - mirror.origin[axis]).min()) for axis in mirror.axis_indices]
     p = int(np.argmax(gaps))
     axis = mirror.axis_indices[p]
-    return ValueError(f"the {mirror.axes[p]} mirror plane ({mirror.axes[p]} = {mirror.origin[axis]:.6g}) lies "
+    return ValueError(f"the {mirror.axes[p]} mirror plane ({mirror.axes[p]} = {mirror.origin[axis]:.10g}) lies "
                       f"{gaps[p]:.3g} from the half, {gaps[p] / diagonal:.3g} times the half's size ({diagonal:.3g}): "
                       f"the half and its reflection, that far apart, make a whole model too thin to span a surface "
                       f"({exc}). A mirror plane usually runs through the half's seam: check Mirror's origin, "

@@ -95,7 +95,7 @@ def describe(dec, source=None) -> str:
         lines.append(f"  {len(dec.parts)} connected parts, decomposed apart"
                      + (f"; {short} keep fewer levels (see the warning)" if short else ""))
     if dec.mirror is not None:
-        origin = ", ".join(f"{v:.6g}" for v in dec.mirror.origin)
+        origin = ", ".join(f"{v:.10g}" for v in dec.mirror.origin)
         lines.append(f"  mirror symmetric about {dec.mirror.axes} through ({origin}), seam {dec.mirror.seam:.3g}")
     if source is not None:
         lines.append("source: " + describe_source(source))
