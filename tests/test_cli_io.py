@@ -493,3 +493,22 @@ def test_reconstruct_rebuilds_a_mirrored_half(tmp_path):
         assert done.returncode == 0, (name, done.stderr)
         assert np.array_equal(io.read(out).points, expected), name
     assert np.abs(io.read(tmp_path / "plain.ply").points - half).max() < 1e-12
+
+
+def test_small_command_line_notes(tmp_path):
+    """A folder as input said "unknown extension '(none)'"; --fold-reference without --folds was
+    ignored without a word; STL level files, which --base can never take back, were written
+    without one."""
+    (tmp_path / "scans").mkdir()
+    assert one_line_error(run("decompose", str(tmp_path / "scans"), "-o", str(tmp_path / "o"))).endswith(
+        "is a folder, not a file")
+    from pointscale import meshes
+    v, f = meshes.uv_sphere(1.0, 72, 36)
+    io.write(tmp_path / "in.ply", io.Scan(points=meshes.bumpy(v, 0.03, 6), faces=f))
+    done = run("decompose", str(tmp_path / "in.ply"), "-o", str(tmp_path / "dec"), "--levels", "3", "--format", ".stl")
+    assert done.returncode == 0 and "cannot come back as reconstruct --base" in done.stderr, done.stderr
+    done = run("reconstruct", str(tmp_path / "dec"), "--fold-reference", "base", "-o", str(tmp_path / "r.ply"))
+    assert done.returncode == 0 and "--fold-reference base applies to --folds report or prevent only" in done.stderr
+    done = run("reconstruct", str(tmp_path / "dec"), "--fold-reference", "base", "--folds", "report",
+               "-o", str(tmp_path / "r2.ply"))
+    assert done.returncode == 0 and "applies to --folds" not in done.stderr

@@ -171,6 +171,10 @@ def cmd_decompose(args) -> None:
         if extension not in FORMATS_WITH_VERTEX_SCALARS:
             warnings.warn(f"{extension} has no room for a vertex scalar: the level files leave out each band's detail, "
                           f"which {DECOMPOSITION_FILE} holds (.ply, .las, .laz and .xyz carry it)", stacklevel=1)
+        if extension == ".stl":
+            warnings.warn(".stl stores triangle corners, and reading it merges and renumbers the vertices, so an STL "
+                          "level 0 cannot come back as reconstruct --base: to edit the base, write the levels with "
+                          "--format .ply", stacklevel=1)
         start = time.perf_counter()
         used_normals = normals_to_use(scan, args)
         try:
@@ -236,6 +240,9 @@ def cmd_reconstruct(args) -> None:
             warnings.warn(f"the result has points and normals only: {Path(args.decomposition) / SOURCE_FILE}, which "
                           "keeps the input's faces and attributes, is missing")
         gains = parse_gains(args.gains, dec.n_bands) if args.gains is not None else None  # "" is refused
+        if args.fold_reference != "input" and args.folds == "ignore":
+            warnings.warn(f"--fold-reference {args.fold_reference} applies to --folds report or prevent only; "
+                          "without --folds nothing is measured")
         template = source if source is not None else io.Scan(points=dec.base)
         check_format_holds(out.suffix.lower(), template, args.decomposition, points=dec.base, shown=out)
         base = read_base(args.base, dec.n_points, source, dec.base, args.threads) if args.base else None
