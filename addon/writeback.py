@@ -138,7 +138,8 @@ def clear(obj) -> list:
     if painted:
         notes.append(f"kept the painted {', '.join(painted)} (delete them under Vertex Groups if unwanted)")
     if keys.BASE_PREVIOUS in previous:
-        notes.append(f"kept the edited base as '{keys.BASE_PREVIOUS}' (delete it under Shape Keys if unwanted)")
+        notes.append(f"kept 'Level 0', changed since Decompose wrote it, as '{keys.BASE_PREVIOUS}' (delete it under "
+                     "Shape Keys if unwanted)")
     copies = [name for name in previous if keys.is_edited_layout_copy(name)]
     if copies:
         notes.append(f"kept your edits of other levels and bands as {', '.join(repr(name) for name in copies)} "

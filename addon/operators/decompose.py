@@ -228,8 +228,10 @@ class POINTSCALE_OT_decompose(RunsInBackground, bpy.types.Operator):
         kept = writeback.apply_layout(obj, layout, basis=points, data=data)
         k = layout.k
         if keys.BASE_PREVIOUS in kept:
-            self.report({"INFO"}, f"Decompose '{obj.name}': your edited base is kept as '{keys.BASE_PREVIOUS}', "
-                                  "switched off (the new 'Level 0' is the new decomposition's)")
+            self.report({"INFO"}, f"Decompose '{obj.name}': the earlier 'Level 0', changed since it was written (an "
+                                  "edit, or a change of the Basis or of the mesh that Blender carried into it), is "
+                                  f"kept as '{keys.BASE_PREVIOUS}', switched off (the new 'Level 0' is the new "
+                                  "decomposition's)")
         copies = [name for name in kept if keys.is_edited_layout_copy(name)]
         if copies:
             self.report({"INFO"}, f"Decompose '{obj.name}': your edits of other levels and bands are kept as "
