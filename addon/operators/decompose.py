@@ -54,6 +54,27 @@ def _mirror_planes(obj, points):
     return planes
 
 
+def _mirror_signature(obj) -> tuple:
+    """What of an object's Mirror modifiers decides the planes Decompose reads (_mirror_planes)."""
+    return tuple((tuple(m.use_axis), m.mirror_object.name if m.mirror_object else None, m.use_mirror_merge,
+                  m.use_clip, round(m.merge_threshold, 9)) for m in mirror_modifier.mirror_modifiers(obj.modifiers))
+
+
+def _mirrored_otherwise_message(obj) -> str | None:
+    """The note for other objects sharing the mesh (linked duplicates) whose Mirror modifiers
+    differ from obj's: the decomposition follows obj's, and the others' seams may tear."""
+    if obj.data.users < 2:
+        return None
+    mine = _mirror_signature(obj)
+    others = [o.name for o in bpy.data.objects if o.data == obj.data and o != obj and _mirror_signature(o) != mine]
+    if not others:
+        return None
+    return (f"{', '.join(repr(n) for n in others)} {'shares' if len(others) == 1 else 'share'} this mesh but "
+            f"{'mirrors' if len(others) == 1 else 'mirror'} it otherwise (Mirror modifiers): the decomposition "
+            f"follows those of '{obj.name}', so a seam mirrored only there may tear; decompose from the object "
+            "whose Mirror modifier the mesh is made for")
+
+
 def _largest_part(ps, points, edges) -> int:
     """The vertex count of the largest of the parts Keep Parts Apart decomposes alone."""
     labels, _count = ps.parts.connected_parts(points, edges=edges)
@@ -81,6 +102,7 @@ def _prepare(op, context):
             kwargs["edges"] = mesh_io.read_edges(mesh)
             op._input_notes.append(compute.logic.loose_vertices_message(len(points), kwargs["edges"]))
         op._input_notes.append(compute.logic.uneven_scale_message(np.array(obj.matrix_world)[:3, :3], obj.name))
+        op._input_notes.append(_mirrored_otherwise_message(obj))
         op._input_notes.append(compute.logic.unapplied_modifiers_message(
             [(m.name, m.type) for m in obj.modifiers if m.show_viewport], obj.name))
         # A mesh too small for the levels asked gets the levels it supports, and is told how to

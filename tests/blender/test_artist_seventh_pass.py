@@ -194,3 +194,21 @@ def test_modifiers_that_change_the_shape_are_named_at_decompose(addon, capfd):
     obj.modifiers["Bumps"].show_viewport = False
     h.decompose(obj, levels=3)
     assert "modifiers that change its shape" not in capfd.readouterr().out
+
+
+def test_a_linked_duplicate_mirrored_otherwise_is_named_at_decompose(addon, capfd):
+    """Decompose from the user without the Mirror modifier: the other user's seam tore (its seam
+    vertices up to 0.049 off the plane), without a word."""
+    obj = _bumpy_half_sphere()
+    obj.modifiers.remove(obj.modifiers["Mirror"])
+    twin = bpy.data.objects.new("Twin", obj.data)
+    bpy.context.scene.collection.objects.link(twin)
+    twin.modifiers.new("Mirror", "MIRROR")
+    bpy.context.view_layer.objects.active = obj
+    capfd.readouterr()
+    h.decompose(obj, levels=3)
+    out = capfd.readouterr().out
+    assert "'Twin' shares this mesh but mirrors it otherwise" in out, out
+    obj.modifiers.new("Mirror", "MIRROR")  # now alike: nothing to say
+    h.decompose(obj, levels=3)
+    assert "mirrors it otherwise" not in capfd.readouterr().out
