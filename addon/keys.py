@@ -414,19 +414,21 @@ def keep_as_previous(obj, name: str, mine: set) -> bool:
     return True
 
 
-def remove_layout(obj, k: int) -> list:
+def remove_layout(obj, k: int) -> tuple:
     """Removes the keys this add-on made, but for the kept "(previous)" keys, which stay
     recorded as the add-on's (a later Decompose replaces them); an edited Level 0 and the last
     Multiscale Edit and Filter are kept as ones first, as a new Decompose keeps them. Returns
-    their names."""
+    (the names of those it made now, the names of older ones it kept)."""
     mesh = obj.data
     active = obj.active_shape_key.name if obj.active_shape_key is not None else None
     mine = owned(mesh, k)
-    keep_edited_base(obj, mine)
-    keep_edited_layout(obj, mine)
+    made = [BASE_PREVIOUS] if keep_edited_base(obj, mine) else []
+    made += keep_edited_layout(obj, mine)
     for name in (EDIT, FILTER):
-        if keep_as_previous(obj, name, mine) and active == name:
-            active = name + PREVIOUS
+        if keep_as_previous(obj, name, mine):
+            made.append(name + PREVIOUS)
+            if active == name:
+                active = name + PREVIOUS
     kept = sorted(name for name in mine if name.endswith(PREVIOUS) and get(mesh, name) is not None)
     for name in sorted(mine - set(kept)):
         remove_key(obj, name)
@@ -438,7 +440,7 @@ def remove_layout(obj, k: int) -> list:
         if prop in mesh.keys():
             del mesh[prop]
     _restore_active(obj, active)
-    return kept
+    return made, [name for name in kept if name not in made]
 
 
 def add_owned(mesh, name: str) -> None:

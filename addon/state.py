@@ -67,6 +67,9 @@ def decomposed_problem(obj) -> str | None:
         )
     if mesh.shape_keys is None or mesh.shape_keys.reference_key is None:
         return f"'{obj.name}' lost its shape keys: Decompose again"
+    if not mesh.shape_keys.use_relative:  # absolute keys show none of the results
+        return (f"the shape keys of '{obj.name}' were made absolute (Relative is off): turn Relative back on under "
+                "Shape Keys; the Level, Band and result keys show only as relative keys")
     k = mesh.multiscale.n_bands
     kbs = mesh.shape_keys.key_blocks
     for name in [keys.level_name(l) for l in range(k)] + [keys.band_name(l) for l in range(k)]:

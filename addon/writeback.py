@@ -110,7 +110,7 @@ def clear(obj) -> list:
     settings = mesh.multiscale
     k = max(settings.n_bands, 0)
     groups = keys.owned_groups(mesh, k)  # only these vertex groups are the add-on's to remove
-    previous = keys.remove_layout(obj, k)
+    previous, older = keys.remove_layout(obj, k)
     storage.clear(mesh)
     drop_detail_colors(mesh)
     notes = []
@@ -146,7 +146,10 @@ def clear(obj) -> list:
                      "(delete them under Shape Keys if unwanted)")
     results = [name for name in previous if name != keys.BASE_PREVIOUS and name not in copies]
     if results:
-        notes.append(f"kept the earlier results {', '.join(results)} (delete them under Shape Keys if unwanted)")
+        notes.append(f"kept the last results as {', '.join(repr(n) for n in results)}, switched off (delete them under "
+                     "Shape Keys if unwanted)")
+    if older:
+        notes.append(f"kept the earlier {', '.join(repr(n) for n in older)} (delete them under Shape Keys if unwanted)")
     if keys.remove_created_basis(obj) is False:
         notes.append("kept the Basis key: other shape keys need it")
     settings.n_vertices = 0

@@ -212,3 +212,37 @@ def test_a_linked_duplicate_mirrored_otherwise_is_named_at_decompose(addon, capf
     obj.modifiers.new("Mirror", "MIRROR")  # now alike: nothing to say
     h.decompose(obj, levels=3)
     assert "mirrors it otherwise" not in capfd.readouterr().out
+
+
+def test_absolute_keys_are_refused_by_rebuild_and_bake(addon):
+    """With Relative turned off after the Decompose, Rebuild Detail and Bake Filter said they
+    had rebuilt and baked, and the viewport kept showing the Basis."""
+    obj = h.mesh_object(h.noisy_sphere(3000))
+    mesh = obj.data
+    h.decompose(obj, levels=3)
+    mesh.shape_keys.use_relative = False
+    for operator in (bpy.ops.pointscale.rebuild_detail, bpy.ops.pointscale.bake_filter):
+        assert not operator.poll()
+        with pytest.raises(RuntimeError, match="made absolute \\(Relative is off\\): turn Relative back on"):
+            operator()
+    assert mesh.shape_keys.key_blocks.get("Multiscale Edit") is None
+    assert bpy.ops.pointscale.clear() == {"FINISHED"}  # Clear still cleans up
+
+
+def test_clear_says_what_it_kept_now_and_what_was_kept_before(addon, capfd):
+    """A 'Level 0 (previous)' left by an earlier Decompose was reported by the next Clear as
+    'kept Level 0, changed since Decompose wrote it', though the fresh Level 0 was unedited and
+    dropped."""
+    obj = h.mesh_object(h.noisy_sphere(3000))
+    mesh = obj.data
+    h.decompose(obj, levels=3)
+    level0 = h.key(mesh, "Level 0")
+    level0[:, 0] += 0.01
+    h.set_key(mesh, "Level 0", level0)
+    h.decompose(obj, levels=3)  # keeps the edit as 'Level 0 (previous)'
+    capfd.readouterr()
+    assert bpy.ops.pointscale.clear() == {"FINISHED"}
+    out = capfd.readouterr().out
+    assert "changed since Decompose wrote it" not in out, out
+    assert "kept the earlier 'Level 0 (previous)'" in out, out
+    assert np.array_equal(h.key(mesh, "Level 0 (previous)"), level0)
