@@ -245,7 +245,8 @@ def write_layout(obj, levels: np.ndarray, bands: np.ndarray, old_k: int, base_fi
         ensure_key(obj, level_name(l), levels[l]).value = 0.0
     mesh[WRITTEN_BASE] = base_fingerprint or _fingerprint(levels[0])
     mesh[WRITTEN_LAYOUT] = {**{level_name(l): _checksum(levels[l]) for l in range(1, k)},
-                            **{band_name(l): _checksum(bands[l]) for l in range(k)}}
+                            **{band_name(l): _checksum(bands[l]) for l in range(k)},
+                            _BASIS_CHECKSUM: _checksum(mesh_io.read_basis(mesh))}
     for l in range(k):
         before = get(mesh, band_name(l))
         chosen = before.vertex_group if before is not None else ""
@@ -299,14 +300,24 @@ def _checksum(co) -> str:
     return f"{len(co)}:{zlib.crc32(memoryview(co).cast('B')):08x}"
 
 
+_BASIS_CHECKSUM = "(Basis)"  # in WRITTEN_LAYOUT: the Basis the keys were written over
+
+
 def edited_layout_keys(mesh, mine: set) -> list:
     """The add-on's Level keys above 0 and Band keys whose positions differ from what Decompose
-    wrote (none for a decomposition made before the checksums were kept)."""
+    wrote (none for a decomposition made before the checksums were kept). None either once the
+    Basis changed (an edit of the mesh, Apply Scale, a subdivision): Blender carries that change
+    into every relative key, which is no edit of theirs."""
     written = mesh.get(WRITTEN_LAYOUT)
     if written is None:
         return []
+    basis = written.get(_BASIS_CHECKSUM)
+    if basis is not None and _checksum(mesh_io.read_basis(mesh)) != basis:
+        return []
     edited = []
     for name, checksum in written.items():
+        if name == _BASIS_CHECKSUM:
+            continue
         kb = get(mesh, name)
         if kb is not None and name in mine and _checksum(mesh_io.read_key(kb)) != checksum:
             edited.append(name)
@@ -322,7 +333,8 @@ def unused_edits_message(mesh, done: str) -> str | None:
     names = ", ".join(repr(name) for name in edited)
     return (f"{done}, but {names} {'was' if len(edited) == 1 else 'were'} edited since Decompose and "
             f"{'is' if len(edited) == 1 else 'are'} not used: only '{level_name(0)}' is the base it builds on "
-            f"(Edit Base edits it). A new Decompose or Clear keeps the edit as '{edited[0]}{PREVIOUS}'")
+            f"(Edit Base edits it). A new Decompose or Clear keeps "
+            f"{'it as ' + repr(edited[0] + PREVIOUS) if len(edited) == 1 else 'each as <name>' + PREVIOUS}")
 
 
 def is_edited_layout_copy(name: str) -> bool:

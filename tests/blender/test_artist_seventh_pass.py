@@ -246,3 +246,26 @@ def test_clear_says_what_it_kept_now_and_what_was_kept_before(addon, capfd):
     assert "changed since Decompose wrote it" not in out, out
     assert "kept the earlier 'Level 0 (previous)'" in out, out
     assert np.array_equal(h.key(mesh, "Level 0 (previous)"), level0)
+
+
+def test_a_basis_edit_carried_into_the_keys_is_no_edit_of_theirs(addon, capfd):
+    """A Basis vertex moved in Edit Mode: Blender carries the move into every relative key, and
+    the next Decompose kept 'Level 1 (previous)', 'Band 0 (previous)'... as 'your edits of other
+    levels and bands'."""
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=4)
+    obj = bpy.context.active_object
+    mesh = obj.data
+    h.decompose(obj, levels=3)
+    obj.active_shape_key_index = 0
+    bpy.ops.object.mode_set(mode="EDIT")
+    bm = bmesh.from_edit_mesh(mesh)
+    bm.verts.ensure_lookup_table()
+    bm.verts[0].co.z += 0.05
+    bmesh.update_edit_mesh(mesh)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    capfd.readouterr()
+    h.decompose(obj, levels=3)
+    out = capfd.readouterr().out
+    assert "your edits of other levels and bands" not in out, out
+    assert not any(name.startswith(("Level 1 ", "Band ")) and name.endswith("(previous)")
+                   for name in mesh.shape_keys.key_blocks.keys())
