@@ -512,3 +512,35 @@ def test_small_command_line_notes(tmp_path):
     done = run("reconstruct", str(tmp_path / "dec"), "--fold-reference", "base", "--folds", "report",
                "-o", str(tmp_path / "r2.ply"))
     assert done.returncode == 0 and "applies to --folds" not in done.stderr
+
+
+def test_a_triangulated_base_of_a_quad_mesh_is_taken(tmp_path):
+    """MeshLab triangulates polygons on reading: a quad grid's level 0 came back as triangles,
+    and --base refused it as renumbered (0% of its faces matched)."""
+    n = 48
+    u, v = np.meshgrid(np.linspace(0, 3, n), np.linspace(0, 2, n))
+    points = np.c_[u.ravel(), v.ravel(), (0.1 * np.sin(3 * u) * np.cos(4 * v)).ravel()]
+    idx = np.arange(n * n).reshape(n, n)
+    quads = np.stack([idx[:-1, :-1], idx[:-1, 1:], idx[1:, 1:], idx[1:, :-1]], axis=-1).reshape(-1, 4)
+    io.write(tmp_path / "grid.ply", io.Scan(points=points, faces=quads))
+    assert run("decompose", str(tmp_path / "grid.ply"), "-o", str(tmp_path / "dec"), "--levels", "3").returncode == 0
+    level0 = io.read(tmp_path / "dec" / "level_0.ply").points
+    triangles = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    io.write(tmp_path / "tri.ply", io.Scan(points=level0, faces=triangles))
+    done = run("reconstruct", str(tmp_path / "dec"), "--base", str(tmp_path / "tri.ply"), "-o", str(tmp_path / "r.ply"))
+    assert done.returncode == 0, done.stderr
+    assert np.abs(io.read(tmp_path / "r.ply").points - points).max() < 1e-9
+
+
+def test_an_stl_input_takes_its_own_stl_level_back(tmp_path):
+    """Decompose of an STL said its STL level 0 could not come back as --base: it can (an STL's
+    vertices are numbered as they are read, and its levels are written in that order)."""
+    from pointscale import meshes
+    v, f = meshes.uv_sphere(1.0, 64, 32)
+    io.write(tmp_path / "in.stl", io.Scan(points=meshes.bumpy(v, 0.03, 5), faces=f))
+    done = run("decompose", str(tmp_path / "in.stl"), "-o", str(tmp_path / "dec"), "--levels", "3")
+    assert done.returncode == 0 and "cannot come back" not in done.stderr, done.stderr
+    done = run("reconstruct", str(tmp_path / "dec"), "--base", str(tmp_path / "dec" / "level_0.stl"),
+               "-o", str(tmp_path / "r.ply"))
+    assert done.returncode == 0, done.stderr
+    assert np.abs(io.read(tmp_path / "r.ply").points - io.read(tmp_path / "in.stl").points).max() < 1e-6

@@ -141,13 +141,21 @@ def test_a_single_precision_base_of_a_far_off_model_is_warned_of(tmp_path, offse
     io.write(tmp_path / "cloud.ply", io.Scan(points=points))
     assert run_cli("decompose", str(tmp_path / "cloud.ply"), "-o", str(tmp_path / "dec"), "--levels", "3").returncode == 0
     level0 = io.read(tmp_path / "dec" / "level_0.ply")
+    edited = level0.points.copy()
+    edited[:50, 2] += 0.5
     for precision, name in ((np.float32, "single.ply"), (np.float64, "double.ply")):
-        io.write(tmp_path / name, io.Scan(points=level0.points, precision=precision))
+        io.write(tmp_path / name, io.Scan(points=edited, precision=precision))
         done = run_cli("reconstruct", str(tmp_path / "dec"), "--base", str(tmp_path / name), "-o",
                        str(tmp_path / f"out_{name}"))
         assert done.returncode == 0, done.stderr
-        warned = "holds single-precision (float32) coordinates" in done.stderr
+        warned = "its 50 edited vertices are rounded by float32" in done.stderr
         assert warned == (said and precision == np.float32), (name, done.stderr)
+    # Unedited, in float32: taken at full precision, so the result is the input, and nothing is said.
+    io.write(tmp_path / "unedited.ply", io.Scan(points=level0.points, precision=np.float32))
+    done = run_cli("reconstruct", str(tmp_path / "dec"), "--base", str(tmp_path / "unedited.ply"), "-o",
+                   str(tmp_path / "out.ply"))
+    assert done.returncode == 0 and "float32" not in done.stderr, done.stderr
+    assert np.abs(io.read(tmp_path / "out.ply").points - points).max() < 1e-9
 
 
 def test_cloudcompare_field_names_fill_the_standard_las_fields(tmp_path):

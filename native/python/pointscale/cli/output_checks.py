@@ -137,7 +137,7 @@ def read_base(path: str, n_points: int, source, stored=None, threads: int = 0):
                          "(edit level_0 without adding or removing vertices)")
     base = _in_input_order(base, source)
     if stored is not None:
-        _warn_if_single_precision_rounds(path, base, source, stored)
+        base = _unedited_at_full_precision(path, base, source, stored)
     if source is not None and source.n_faces and base.n_faces:
         shared = _share_of_faces_kept(base.faces, source.faces)
         if shared < FACES_KEPT:
@@ -156,19 +156,27 @@ def read_base(path: str, n_points: int, source, stored=None, threads: int = 0):
 SINGLE_PRECISION_SAID = 1e-6
 
 
-def _warn_if_single_precision_rounds(path: str, base, source, stored: np.ndarray) -> None:
-    """A base saved in single precision (what MeshLab and Blender write) of a decomposition
-    in double: far from the origin its rounding moves every point, and the detail with it."""
+def _unedited_at_full_precision(path: str, base, source, stored: np.ndarray):
+    """A base saved in single precision (what MeshLab and Blender write) of a decomposition in
+    double: its vertices that float32 holds as the stored level 0 rounded are taken as the
+    stored ones (unedited), as the Blender add-on takes them. The edited ones keep float32's
+    rounding, which far from the origin moves them, and their detail, visibly: said."""
     double = source is None or np.dtype(source.precision) == np.float64
     if np.dtype(base.precision) != np.float32 or not double:
-        return
+        return base
+    unedited = np.all(base.points.astype(np.float32) == stored.astype(np.float32), axis=1)
+    points = base.points.copy()
+    points[unedited] = stored[unedited]
+    edited = points[~unedited]
     size = float(np.linalg.norm(np.ptp(stored, axis=0)))
-    rounding = float(np.abs(base.points).max()) * 2.0 ** -24
+    rounding = float(np.abs(edited).max()) * 2.0 ** -24 if len(edited) else 0.0
     if size > 0.0 and rounding > SINGLE_PRECISION_SAID * size:
         warnings.warn(f"--base {path} holds single-precision (float32) coordinates and the decomposition double; "
-                      f"this far from the origin float32 rounds them by up to {rounding:.2g} ({rounding / size:.1e} of "
-                      "the model's size), and every point of the result moves with it. Save the edited level 0 in "
-                      "double precision (as level_0 was written)")
+                      f"its {len(edited)} edited vertices are rounded by float32 by up to {rounding:.2g} "
+                      f"({rounding / size:.1e} of the model's size) this far from the origin, and their detail moves "
+                      "with them (the unedited ones are taken at full precision). Save the edited level 0 in double "
+                      "precision where the tool can (a PLY with double properties)")
+    return base.with_geometry(points, base.normals)
 
 
 def _in_input_order(base, source):
@@ -227,14 +235,33 @@ def _warn_if_reordered(path: str, base: np.ndarray, stored: np.ndarray, threads:
 FACES_KEPT = 0.5
 
 
-def _face_keys(faces) -> set:
-    """Each face as its sorted vertex indices (its winding, first vertex and place ignored)."""
-    if isinstance(faces, np.ndarray):
-        return set(map(tuple, np.sort(faces, axis=1).tolist()))
-    return {tuple(sorted(int(v) for v in face)) for face in faces}
-
-
 def _share_of_faces_kept(base_faces, source_faces) -> float:
-    """The share of base_faces that are faces of the source, as vertex sets."""
-    base = _face_keys(base_faces)
-    return len(base & _face_keys(source_faces)) / max(len(base), 1)
+    """The share of base_faces whose every edge joins two vertices of one source face: a face
+    of the source flipped or moved, or a triangle of a source polygon split (MeshLab
+    triangulates polygons on reading, Blender's exporters can), keeps them all."""
+    source = np.unique(np.concatenate([k.ravel() for k in _vertex_pairs(source_faces, every=True)]))
+    kept = sum(int(np.isin(k, source).all(axis=1).sum()) for k in _vertex_pairs(base_faces, every=False))
+    return kept / max(len(base_faces), 1)
+
+
+def _vertex_pairs(faces, every: bool) -> list:
+    """Per group of faces of one size, (m, pairs) int64 keys a * 2^32 + b with a < b: each
+    face's every vertex pair, or only its edges."""
+    groups = [faces] if isinstance(faces, np.ndarray) else _by_size(faces)
+    out = []
+    for f in groups:
+        f = np.asarray(f, dtype=np.int64)
+        k = f.shape[1]
+        pairs = [(i, j) for i in range(k) for j in range(i + 1, k)] if every else [(i, (i + 1) % k) for i in range(k)]
+        a = f[:, [i for i, _ in pairs]]
+        b = f[:, [j for _, j in pairs]]
+        out.append(np.minimum(a, b) * 2**32 + np.maximum(a, b))
+    return out
+
+
+def _by_size(faces) -> list:
+    """Polygons of several sizes as one (m, k) array per size."""
+    sizes = {}
+    for face in faces:
+        sizes.setdefault(len(face), []).append(face)
+    return [np.array(group, dtype=np.int64) for group in sizes.values()]
