@@ -176,3 +176,31 @@ def test_cloudcompare_field_names_fill_the_standard_las_fields(tmp_path):
     assert np.array_equal(las.intensity, intensity) and np.array_equal(las.classification, classes)
     assert np.array_equal(las.return_number, returns)
     assert list(las.point_format.extra_dimension_names) == ["Own_Field"]
+
+
+def test_small_file_cases_after_a_review(tmp_path):
+    """A header below a CRS line naming more columns than the rows have was dropped without a
+    word; a comment above a later PTS block's count was refused in NumPy's words, and a bare '#'
+    kept as an empty comment; an OBJ face above every v line was told '-0..-1'."""
+    (tmp_path / "h.xyz").write_text("# EPSG:25832\n//X Y Z GPS Time\n0 0 0 1\n1 0 0 2\n0 1 0 3\n")
+    with pytest.warns(UserWarning, match="the header line names 5 columns but the rows have 4"):
+        io.read(tmp_path / "h.xyz")
+    (tmp_path / "e.pts").write_text("# site A\n2\n0 0 0\n1 0 0\n#\n// station 2\n3\n0 1 0\n1 1 0\n0 0 1\n")
+    scan = io.read(tmp_path / "e.pts")
+    assert scan.format_info["comments"] == ["site A", "station 2"]
+    assert np.array_equal(scan.vertex_attributes["scan_id"], [0, 0, 1, 1, 1])
+    (tmp_path / "o.obj").write_text("f -1 -2 -3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n")
+    with pytest.raises(ValueError, match="outside 1..3; no vertices stand above the face to count back from"):
+        io.read(tmp_path / "o.obj")
+
+
+def test_a_float_intensity_stays_extra_bytes_of_its_own_name(tmp_path):
+    """A scanner's Intensity of 0..1 does not fit LAS's uint16 field: it was renamed to
+    'intensity' anyway and kept as extra bytes 'intensity_value', a name the input never had."""
+    laspy = pytest.importorskip("laspy")
+    rng = np.random.default_rng(1)
+    scan = io.Scan(points=rng.uniform(0, 10, (300, 3)), vertex_attributes={"Intensity": rng.random(300)})
+    io.write(tmp_path / "out.las", scan)
+    las = laspy.read(tmp_path / "out.las")
+    assert list(las.point_format.extra_dimension_names) == ["Intensity"]
+    assert np.array_equal(las["Intensity"], scan.vertex_attributes["Intensity"])

@@ -260,7 +260,8 @@ def _standard_names(attributes: dict, standard: dict) -> dict:
     out = {}
     for name, column in attributes.items():
         field = by_plain.get(_plain(name))
-        if field is not None and field != name and field not in attributes and field not in out:
+        if (field is not None and field != name and field not in attributes and field not in out
+                and _fits(np.asarray(column), standard[field])):  # else kept as extra bytes of its own name
             out[field] = column
         else:
             out[name] = column

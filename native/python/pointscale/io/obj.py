@@ -168,8 +168,9 @@ def _faces(face_lines: list, nv: int, nvt: int, nvn: int, path: str, seen: np.nd
             at = int(np.argmax(bad))
             first = int(written[at])
             many = ("vertices", "texture coordinates", "normals")[j]
-            allowed = (f"outside 1..{count} (or -{int(above[at])}..-1, counted back from the {many} above the face)"
-                       if count else f"but the file has no {many}")
+            back = (f" (or -{int(above[at])}..-1, counted back from the {many} above the face)" if above[at]
+                    else f"; no {many} stand above the face to count back from")
+            allowed = f"outside 1..{count}{back}" if count else f"but the file has no {many}"
             raise ValueError(f"{path}: a face refers to {what} {first}, {allowed}")
         columns.append(column)
     columns += [None] * (3 - len(columns))

@@ -52,9 +52,9 @@ def read_xyz(path) -> Scan:
     names_given = header is not None and _names_columns(header, rows.shape[1])
     if names_given:
         names, dtypes = _parse_header(header, rows.shape[1], path)
-    else:  # no header, or a first comment that does not name the columns
-        if header is not None:
-            _warn_if_header_unread(path, header, rows.shape[1])
+    else:  # no header, or no comment that names the columns
+        for comment in comments:
+            _warn_if_header_unread(path, comment, rows.shape[1])
         names, dtypes = _guess_xyz_columns(rows)
     exact = _wide_integer_columns(path, names, dtypes, skip=len(comments)) if names_given else {}
     declared = _declared_columns(header, rows.shape[1]) if names_given else set()
@@ -137,6 +137,7 @@ def read_pts(path) -> Scan:
         raise ValueError(f"{path}: .pts rows have 3, 4, 6 or 7 columns, got {rows.shape[1]}")
     names = ["x", "y", "z", *extra]
     dtypes = ["f8"] * 3 + [_integer_dtype(rows[:, 3 + i], name) for i, name in enumerate(extra)]
+    comments = [c for c in comments if c]
     info = {"format": "pts"}
     if comments:  # written back into XYZ and PLY; Leica's readers take none in a .pts
         info["comments"] = comments
@@ -171,6 +172,12 @@ def _pts_rows(path: str):
     lines = lines[len(comments):]  # the comment lines above the first count line
     parts, blocks, i = [], [], 0
     while i < len(lines):
+        if lines[i].lstrip().startswith(("#", "//")):  # a comment above a later block's count line
+            comment = lines[i].lstrip().lstrip("#/").strip()
+            if comment:
+                comments.append(comment)
+            i += 1
+            continue
         words = lines[i].split()
         if len(words) != 1 or not words[0].isdigit():
             raise single
@@ -337,7 +344,7 @@ def _warn_if_header_unread(path: str, header: str, ncols: int) -> None:
     name with a space in it, "GPS Time") names none of them: say so, not drop the names."""
     words = header.replace(",", " ").split()
     if _starts_with_xyz(words):
-        warnings.warn(f"{path}: the first line names {len(words)} columns but the rows have {ncols}, so its names "
+        warnings.warn(f"{path}: the header line names {len(words)} columns but the rows have {ncols}, so its names "
                       f"are not used (columns after z are read as column_3 ... and no colours): a column name "
                       f"with a space in it? Write it without spaces, or part the names with commas", stacklevel=3)
 
