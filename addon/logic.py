@@ -291,8 +291,9 @@ def uneven_scale_message(linear: np.ndarray, name: str) -> str | None:
             "decompose the shape you see")
 
 
-# Modifiers that leave the shape as it is, or that the add-on handles itself (Mirror).
-_SHAPE_KEEPING_MODIFIERS = {"MIRROR", "ARMATURE", "DATA_TRANSFER", "UV_PROJECT", "UV_WARP", "VERTEX_WEIGHT_EDIT",
+# Modifiers that leave the shape as it is, or that animate or simulate it (the shape at rest is
+# the one to decompose); Geometry Nodes, which may do anything, are not guessed at.
+_SHAPE_KEEPING_MODIFIERS = {"ARMATURE", "DATA_TRANSFER", "UV_PROJECT", "UV_WARP", "VERTEX_WEIGHT_EDIT",
                             "VERTEX_WEIGHT_MIX", "VERTEX_WEIGHT_PROXIMITY", "WEIGHTED_NORMAL", "NORMAL_EDIT",
                             "TRIANGULATE", "NODES", "PARTICLE_SYSTEM", "COLLISION", "SOFT_BODY", "CLOTH", "MESH_CACHE",
                             "MESH_SEQUENCE_CACHE", "SURFACE", "DYNAMIC_PAINT", "OCEAN", "EXPLODE", "FLUID",
@@ -301,10 +302,10 @@ _SHAPE_KEEPING_MODIFIERS = {"MIRROR", "ARMATURE", "DATA_TRANSFER", "UV_PROJECT",
 
 def unapplied_modifiers_message(modifiers, name: str) -> str | None:
     """What to tell the artist when modifiers shown in the viewport change the shape the
-    decomposition does not see: ``modifiers`` are (name, type) pairs of the enabled ones. The
-    engine reads the mesh's own vertices (the Basis), as it reads them under an unapplied scale.
-    Animation and simulation modifiers, Geometry Nodes (which may do anything) and Mirror (read
-    by the add-on itself) are not named."""
+    decomposition does not see: ``modifiers`` are (name, type) pairs of the enabled ones, less
+    the Mirror modifiers Decompose reads itself (Use Mirror Modifier). The engine reads the
+    mesh's own vertices (the Basis), as it reads them under an unapplied scale. Animation and
+    simulation modifiers and Geometry Nodes (which may do anything) are not named."""
     shaping = [f"'{m}'" for m, kind in modifiers if kind not in _SHAPE_KEEPING_MODIFIERS]
     if not shaping:
         return None

@@ -29,7 +29,7 @@ class MirrorPlanes:
     seam: float
 
     def describe(self) -> str:
-        where = ", ".join(f"{a} = {self.origin[AXES.index(a)]:.4g}" for a in self.axes)
+        where = ", ".join(f"{a} = {self.origin[AXES.index(a)]:.10g}" for a in self.axes)
         return f"the Mirror modifier's planes {where} (seam {self.seam:.3g})"
 
 
@@ -51,8 +51,8 @@ def combined(planes: list) -> tuple[MirrorPlanes | None, str | None]:
         for a in p.axes:
             i = AXES.index(a)
             if a in axes and abs(p.origin[i] - origin[i]) > 1e-9 * max(1.0, abs(origin[i])):
-                return None, (f"two Mirror modifiers mirror along {a.upper()} at {origin[i]:.4g} and "
-                              f"{p.origin[i]:.4g}; Pointscale keeps one plane per axis. Turn one off, or turn "
+                return None, (f"two Mirror modifiers mirror along {a.upper()} at {origin[i]:.10g} and "
+                              f"{p.origin[i]:.10g}; Pointscale keeps one plane per axis. Turn one off, or turn "
                               "off Use Mirror Modifier")
             axes[a] = True
             origin[i] = p.origin[i]

@@ -104,7 +104,8 @@ def _prepare(op, context):
         op._input_notes.append(compute.logic.uneven_scale_message(np.array(obj.matrix_world)[:3, :3], obj.name))
         op._input_notes.append(_mirrored_otherwise_message(obj))
         op._input_notes.append(compute.logic.unapplied_modifiers_message(
-            [(m.name, m.type) for m in obj.modifiers if m.show_viewport], obj.name))
+            [(m.name, m.type) for m in obj.modifiers
+             if m.show_viewport and not (m.type == "MIRROR" and s.use_mirror_modifier)], obj.name))
         # A mesh too small for the levels asked gets the levels it supports, and is told how to
         # get the rest; the panel's setting stays as the artist set it. With Keep Parts Apart
         # its largest part is what has to support them: found here for a mesh too small as a

@@ -194,6 +194,11 @@ def test_modifiers_that_change_the_shape_are_named_at_decompose(addon, capfd):
     obj.modifiers["Bumps"].show_viewport = False
     h.decompose(obj, levels=3)
     assert "modifiers that change its shape" not in capfd.readouterr().out
+    # A Mirror modifier is read by Decompose itself, unless Use Mirror Modifier is off.
+    obj.modifiers.new("Half", "MIRROR").use_bisect_axis[0] = True
+    obj.data.multiscale.use_mirror_modifier = False
+    h.decompose(obj, levels=3)
+    assert "modifiers that change its shape ('Half')" in capfd.readouterr().out
 
 
 def test_a_linked_duplicate_mirrored_otherwise_is_named_at_decompose(addon, capfd):

@@ -255,8 +255,9 @@ def symmetry_of(points: np.ndarray, mirror: Mirror) -> Symmetry:
         if gap > FAR_FROM_PLANE * diagonal:
             warnings.warn(f"no point lies within {gap:.6g} of the {name} mirror plane ({name} = "
                           f"{mirror.origin[axis]:.10g}), {gap / diagonal:.0%} of the half's size: a half reaches its "
-                          "plane, so its reflection is a separate copy here. Is the plane's origin given (Mirror's "
-                          "origin, --mirror-origin)? A georeferenced half's plane is far from 0", stacklevel=3)
+                          "plane, so its reflection is a separate copy here. Is the plane where it should be (Mirror's "
+                          "origin, in the points' coordinates; --mirror-origin on the command line)? A georeferenced "
+                          "half's plane is far from 0", stacklevel=3)
     return Symmetry(mirror, on_plane, sides)
 
 
