@@ -389,6 +389,8 @@ def test_a_base_in_another_vertex_order_is_warned_of(tmp_path):
         done = run("reconstruct", str(tmp_path / "out"), "--base", str(base), "-o", str(tmp_path / f"r_{base.stem}.ply"))
         assert done.returncode == 0, done.stderr
         assert ("another vertex order" in done.stderr) == warned, done.stderr
+        # The warning keeps its subject (the command line cut "--base <path>:" off as a file name).
+        assert (f"warning: --base {base}: points that neighbour" in done.stderr) == warned, done.stderr
 
 
 def test_float_colours_rounded_just_past_one_stay_fractions(tmp_path):
