@@ -152,13 +152,20 @@ def test_edits_of_other_levels_and_bands_are_said_unused_and_kept(addon, capfd):
     assert np.array_equal(h.key(mesh, "Level 2 (previous)"), level2)
 
 
-def test_an_edited_level_is_not_kept_over_the_artists_own_key(addon):
+def _decomposed_with_a_key_moved(name: str, axis: int):
+    """A sphere decomposed into 3 levels, then its key `name` moved by 0.01 along `axis`:
+    (object, mesh, the key's moved positions)."""
     obj = h.mesh_object(h.noisy_sphere(3000))
     mesh = obj.data
     h.decompose(obj, levels=3)
-    level1 = h.key(mesh, "Level 1")
-    level1[:, 2] += 0.01
-    h.set_key(mesh, "Level 1", level1)
+    moved = h.key(mesh, name)
+    moved[:, axis] += 0.01
+    h.set_key(mesh, name, moved)
+    return obj, mesh, moved
+
+
+def test_an_edited_level_is_not_kept_over_the_artists_own_key(addon):
+    obj, mesh, level1 = _decomposed_with_a_key_moved("Level 1", 2)
     obj.shape_key_add(name="Level 1 (previous)", from_mix=False)
     with pytest.raises(RuntimeError, match="'Level 1 \\(previous\\)' of its own"):
         bpy.ops.pointscale.decompose()
@@ -238,12 +245,7 @@ def test_clear_says_what_it_kept_now_and_what_was_kept_before(addon, capfd):
     """A 'Level 0 (previous)' left by an earlier Decompose was reported by the next Clear as
     'kept Level 0, changed since Decompose wrote it', though the fresh Level 0 was unedited and
     dropped."""
-    obj = h.mesh_object(h.noisy_sphere(3000))
-    mesh = obj.data
-    h.decompose(obj, levels=3)
-    level0 = h.key(mesh, "Level 0")
-    level0[:, 0] += 0.01
-    h.set_key(mesh, "Level 0", level0)
+    obj, mesh, level0 = _decomposed_with_a_key_moved("Level 0", 0)
     h.decompose(obj, levels=3)  # keeps the edit as 'Level 0 (previous)'
     capfd.readouterr()
     assert bpy.ops.pointscale.clear() == {"FINISHED"}
