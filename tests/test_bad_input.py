@@ -430,3 +430,35 @@ def test_text_for_a_number_and_anything_for_taubin_are_refused(kwargs, name):
     """kernel='3' was read as 3.0, and taubin took any value (Ellipsis, 'no', 1.5) as true."""
     with pytest.raises(ValueError, match=name):
         ps.decompose(GOOD, levels=2, **kwargs)
+
+
+def test_a_reconstructor_called_from_its_own_progress_callback_refuses_instead_of_hanging():
+    """A preview refresh wired into the progress hook called the same Reconstructor again: the
+    thread waited on itself for ever, and Ctrl-C could not stop it."""
+    dec = ps.decompose(ps.shapes.bumpy_sphere(6000), levels=3)
+    solver = ps.Reconstructor(dec)
+    said = []
+
+    def refresh(fraction):
+        try:
+            solver.reconstruct((1, 1.5))
+        except ValueError as exc:
+            said.append(str(exc))
+        return True
+
+    out = solver.reconstruct((1, 2), dec.base * 1.02, progress=refresh)
+    assert said and "called again from within its own call" in said[0]
+    assert np.array_equal(out, ps.reconstruct(dec, (1, 2), dec.base * 1.02))
+    assert np.array_equal(solver.reconstruct((1, 1.5)), ps.reconstruct(dec, (1, 1.5)))  # usable after
+
+
+def test_decompositions_compare_by_their_arrays():
+    """d1 == d2 was False for bit-identical decompositions, and for a saved and loaded one (the
+    dataclass compared the core objects by identity)."""
+    points = ps.shapes.bumpy_sphere(5000, noise=0.002)
+    d1, d2 = ps.decompose(points, levels=3), ps.decompose(points, levels=3)
+    assert d1 == d2 and d1 == ps.Decomposition.from_dict(d1.to_dict())
+    assert d1 != ps.decompose(points, levels=3, kernel=1.5)
+    moved = ps.Decomposition.from_dict(d1.to_dict())
+    moved.origin = moved.origin + 1.0
+    assert d1 != moved and d1 != "a decomposition"

@@ -5,6 +5,7 @@ import contextvars
 import json
 import math
 import os
+import threading
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -26,12 +27,25 @@ FEW_COARSE_POINTS = 100
 _FORMAT_VERSION = 1
 
 
-@dataclass
+@dataclass(eq=False)
 class Decomposition:
     """P^0 plus k signed normal-displacement bands D^0..D^{k-1} (Eq. 11), for n points.
 
     Every level keeps all n points, indexed like the input. Coordinates are the caller's.
+    Two decompositions are equal (==) when every array and setting to_dict() gives is equal,
+    bit for bit: a saved and loaded one equals the one saved.
     """
+
+    def __eq__(self, other):
+        if not isinstance(other, Decomposition):
+            return NotImplemented
+        if self is other:
+            return True
+        a, b = self.to_dict(), other.to_dict()
+        return a.keys() == b.keys() and all(
+            a[key].dtype == b[key].dtype and np.array_equal(a[key], b[key]) for key in a)
+
+    __hash__ = None  # mutable (settings, origin): not a dictionary key
 
     _model: object
     origin: np.ndarray
@@ -785,6 +799,7 @@ class Reconstructor:
         _check_decomposition(dec)
         self._dec = dec
         self._core = _core.Reconstructor(dec._model)
+        self._calling = threading.local()  # set while this thread is inside reconstruct()
 
     def reconstruct(self, gains=None, base=None, *, progress=None, folds: str = "ignore",
                     fold_reference: str = "input"):
@@ -795,8 +810,17 @@ class Reconstructor:
         b = _base_array(self._dec, base, "Reconstructor.reconstruct")
         mode = _fold_mode_option(folds)
         _reference_option(fold_reference)
-        out = self._core.reconstruct(g, base=b, progress=as_callback(progress), origin=self._dec.origin)
-        return _result_with_folds(self._dec, out, b, mode, fold_reference)
+        if getattr(self._calling, "active", False):
+            # Calls run one at a time: this thread would wait on itself, for ever, deaf to Ctrl-C.
+            raise ValueError("Reconstructor.reconstruct was called again from within its own call (from its "
+                             "progress callback?): calls on one Reconstructor run one at a time. Use another "
+                             "Reconstructor, or pointscale.reconstruct(), there")
+        self._calling.active = True
+        try:
+            out = self._core.reconstruct(g, base=b, progress=as_callback(progress), origin=self._dec.origin)
+            return _result_with_folds(self._dec, out, b, mode, fold_reference)
+        finally:
+            self._calling.active = False
 
 
 def reconstruct_levels(dec: Decomposition, gains=None, base=None) -> np.ndarray:
