@@ -32,7 +32,7 @@ class MULTISCALE_PG_band(bpy.types.PropertyGroup):
     index: IntProperty(name="Band", min=0)
     gain: FloatProperty(
         name="Gain",
-        description="Scale of this detail band: 0 removes it, 1 keeps it, above 1 enhances it "
+        description="Scale of this detail band, 0 to 5: 0 removes it, 1 keeps it, above 1 enhances it "
         "(the Band key value is gain - 1; paint the band's mask to apply it locally)",
         get=_gain_get,
         set=_gain_set,
