@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import bpy
 
-from .. import compute, engine, group_weights, keys, mesh_io, storage, writeback
+from .. import animation, compute, engine, group_weights, keys, mesh_io, storage, writeback
 from ._common import DecomposedOperator, mode_problem, set_mode
 
 
@@ -155,7 +155,7 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
                 kb = keys.get(mesh, keys.band_name(l))
                 if kb is not None and not kb.mute:  # a muted band was not baked: its setting stays
                     kb.value = 0.0
-            animated = [keys.band_name(l) for l in range(k) if _value_animated(mesh, keys.band_name(l))]
+            animated = [keys.band_name(l) for l in range(k) if animation.band_animated(mesh, l)]
             if animated:  # their keyframes or drivers set the value again on the next frame
                 self.report({"WARNING"}, f"Bake filter: {', '.join(repr(n) for n in animated)} "
                                          f"{'is' if len(animated) == 1 else 'are'} keyframed or driven, so the value "
@@ -184,26 +184,6 @@ def _baked_gains_shown(mesh, k: int):
     if baked is None or len(baked) != k:
         return None
     return baked if kb.value == 1.0 else 1.0 + kb.value * (baked - 1.0)
-
-
-def _value_animated(mesh, name: str) -> bool:
-    """Whether the shape key's value has keyframes or a driver."""
-    animation = mesh.shape_keys.animation_data if mesh.shape_keys is not None else None
-    if animation is None:
-        return False
-    path = f'key_blocks["{name}"].value'
-    return any(c.data_path == path for c in list(animation.drivers) + _fcurves(animation.action))
-
-
-def _fcurves(action) -> list:
-    """An action's F-curves: Action.fcurves up to Blender 4.5, the layered action's channel
-    bags from 5.0 on (where Action.fcurves is gone)."""
-    if action is None:
-        return []
-    if hasattr(action, "fcurves"):
-        return list(action.fcurves)
-    return [c for layer in getattr(action, "layers", ()) for strip in layer.strips
-            for bag in getattr(strip, "channelbags", ()) for c in bag.fcurves]
 
 
 def _gains_text(gains) -> str:

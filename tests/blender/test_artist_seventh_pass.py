@@ -276,3 +276,40 @@ def test_a_basis_edit_carried_into_the_keys_is_no_edit_of_theirs(addon, capfd):
     assert "your edits of other levels and bands" not in out, out
     assert not any(name.startswith(("Level 1 ", "Band ")) and name.endswith("(previous)")
                    for name in mesh.shape_keys.key_blocks.keys())
+
+
+def test_a_gain_keyframed_on_the_panels_slider_is_warned_of(addon, capfd):
+    """Keyframes on the panel's Gain slider (the mesh's multiscale.bands[0].gain, where hovering
+    it and pressing I puts them) got past Bake Filter's check, which read the Band keys only:
+    the band came back on the next frame and applied twice, without a word. Reset Gains too."""
+    obj = h.mesh_object(h.noisy_sphere(3000))
+    mesh = obj.data
+    h.decompose(obj, levels=3)
+    scene = bpy.context.scene
+    scene.frame_set(1)
+    mesh.keyframe_insert("multiscale.bands[0].gain", frame=1)
+    mesh.multiscale.bands[0].gain = 3.0
+    mesh.keyframe_insert("multiscale.bands[0].gain", frame=20)
+    scene.frame_set(20)
+    capfd.readouterr()
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    assert "'Band 0' is keyframed or driven" in capfd.readouterr().out
+    assert bpy.ops.pointscale.reset_bands() == {"FINISHED"}
+    assert "Reset gains: 'Band 0' is keyframed or driven" in capfd.readouterr().out
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}  # band 1, not animated: nothing said of it
+    assert "'Band 1'" not in capfd.readouterr().out
+
+
+def test_paint_band_mask_keeps_the_group_the_artist_picked(addon):
+    """A group picked as the band key's Vertex Group (as the docs advise) was replaced by a new
+    'Band 1 mask' at weight 1, and the band applied everywhere again."""
+    obj = h.mesh_object(h.noisy_sphere(3000))
+    mesh = obj.data
+    h.decompose(obj, levels=3)
+    face = obj.vertex_groups.new(name="Face")
+    face.add([0, 1, 2, 3], 1.0, "REPLACE")
+    mesh.shape_keys.key_blocks["Band 1"].vertex_group = "Face"
+    assert bpy.ops.pointscale.paint_band_mask(band=1, enter_paint=False) == {"FINISHED"}
+    assert mesh.shape_keys.key_blocks["Band 1"].vertex_group == "Face"
+    assert obj.vertex_groups.get("Band 1 mask") is None
+    assert obj.vertex_groups.active.name == "Face"

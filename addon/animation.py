@@ -1,0 +1,31 @@
+"""Whether a band's value is keyframed or driven: its key's value, or the panel's Gain slider."""
+
+from __future__ import annotations
+
+from . import keys
+
+
+def band_animated(mesh, l: int) -> bool:
+    """Whether band l's value has keyframes or a driver: on its shape key, or on the panel's
+    Gain slider (the mesh's multiscale.bands[l].gain, where hovering it and pressing I puts them)."""
+    return (_animated(mesh.shape_keys, f'key_blocks["{keys.band_name(l)}"].value')
+            or _animated(mesh, f"multiscale.bands[{l}].gain"))
+
+
+def _animated(owner, path: str) -> bool:
+    """Whether ``owner``'s property at ``path`` has keyframes or a driver."""
+    animation = owner.animation_data if owner is not None else None
+    if animation is None:
+        return False
+    return any(c.data_path == path for c in list(animation.drivers) + _fcurves(animation.action))
+
+
+def _fcurves(action) -> list:
+    """An action's F-curves: Action.fcurves up to Blender 4.5, the layered action's channel
+    bags from 5.0 on (where Action.fcurves is gone)."""
+    if action is None:
+        return []
+    if hasattr(action, "fcurves"):
+        return list(action.fcurves)
+    return [c for layer in getattr(action, "layers", ()) for strip in layer.strips
+            for bag in getattr(strip, "channelbags", ()) for c in bag.fcurves]
