@@ -29,3 +29,16 @@ def _fcurves(action) -> list:
         return list(action.fcurves)
     return [c for layer in getattr(action, "layers", ()) for strip in layer.strips
             for bag in getattr(strip, "channelbags", ()) for c in bag.fcurves]
+
+
+def animation_back_to(shape_keys, renamed: str, name: str) -> None:
+    """Blender's rename of the key ``name`` to ``renamed`` carried its value's keyframes and
+    driver along; they are the result's animation, so they go to the new key of ``name``: the
+    renamed one, kept switched off, would be switched on again by them."""
+    animation = shape_keys.animation_data if shape_keys is not None else None
+    if animation is None:
+        return
+    old, new = f'key_blocks["{renamed}"].value', f'key_blocks["{name}"].value'
+    for curve in list(animation.drivers) + _fcurves(animation.action):
+        if curve.data_path == old:
+            curve.data_path = new

@@ -422,6 +422,8 @@ def keep_as_previous(obj, name: str, mine: set) -> bool:
         remove_key(obj, name + PREVIOUS)
     kb.name = name + PREVIOUS
     kb.value = 0.0  # kept, not shown: what replaces it is shown alone
+    from .animation import animation_back_to  # (animation.py reads the key names from here)
+    animation_back_to(obj.data.shape_keys, name + PREVIOUS, name)
     mine.add(name + PREVIOUS)
     return True
 

@@ -313,3 +313,28 @@ def test_paint_band_mask_keeps_the_group_the_artist_picked(addon):
     assert mesh.shape_keys.key_blocks["Band 1"].vertex_group == "Face"
     assert obj.vertex_groups.get("Band 1 mask") is None
     assert obj.vertex_groups.active.name == "Face"
+
+
+def test_a_kept_result_stays_off_when_its_value_was_keyframed(addon):
+    """Keyframes on 'Multiscale Filter' followed the key when it was kept as '(previous)': at
+    frame 20 the old and the new bake both showed at 1."""
+    obj = h.mesh_object(h.noisy_sphere(3000))
+    mesh = obj.data
+    h.decompose(obj, levels=3)
+    mesh.multiscale.bands[0].gain = 2.0
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    scene = bpy.context.scene
+    key = mesh.shape_keys.key_blocks["Multiscale Filter"]
+    key.value = 0.0
+    key.keyframe_insert("value", frame=1)
+    key.value = 1.0
+    key.keyframe_insert("value", frame=20)
+    scene.frame_set(20)
+    key.mute = True  # not built on: the next bake starts from the sliders and keeps this one
+    mesh.multiscale.bands[0].gain = 0.5
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    scene.frame_set(1)
+    scene.frame_set(20)
+    blocks = mesh.shape_keys.key_blocks
+    assert blocks["Multiscale Filter (previous)"].value == 0.0
+    assert blocks["Multiscale Filter"].value == 1.0  # the animation goes on driving the result
