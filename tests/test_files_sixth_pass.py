@@ -204,3 +204,19 @@ def test_a_float_intensity_stays_extra_bytes_of_its_own_name(tmp_path):
     las = laspy.read(tmp_path / "out.las")
     assert list(las.point_format.extra_dimension_names) == ["Intensity"]
     assert np.array_equal(las["Intensity"], scan.vertex_attributes["Intensity"])
+
+
+def test_obj_comment_lines_are_kept(tmp_path):
+    """An OBJ's own '#' lines (the exporter, a unit, a CRS) were dropped without a word."""
+    (tmp_path / "in.obj").write_text("# Blender 4.5 exporter\n# units: metres\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                                     "# a comment between\nf 1 2 3\n")
+    scan = io.read(tmp_path / "in.obj")
+    assert scan.format_info["comments"] == ["Blender 4.5 exporter", "units: metres", "a comment between"]
+    for suffix in (".obj", ".ply", ".xyz"):
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
+            io.write(tmp_path / f"out{suffix}", scan)
+        assert not [w for w in said if "comment lines" in str(w.message)], suffix
+        assert io.read(tmp_path / f"out{suffix}").format_info["comments"] == scan.format_info["comments"], suffix
+    with pytest.warns(UserWarning, match="3 not written"):
+        io.write(tmp_path / "out.stl", scan)

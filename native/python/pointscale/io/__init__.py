@@ -69,12 +69,12 @@ def write(path, scan: Scan) -> None:
     if scan.n_faces and suffix in _FORMATS_WITHOUT_FACES:
         warnings.warn(f"{os.fspath(path)}: {suffix} has no place for faces; {scan.n_faces} faces"
                       f"{' and their attributes' if scan.face_attributes else ''} not written", stacklevel=2)
-    if suffix not in (".ply", ".xyz") and scan.format_info.get("format") in ("ply", "xyz", "pts"):
+    if suffix not in (".ply", ".xyz", ".obj") and scan.format_info.get("format") in ("ply", "xyz", "pts", "obj"):
         from .text import kept_comments
         lines = kept_comments(scan)
         if lines:  # a CRS in a comment is the kind of thing that must not vanish unsaid
             warnings.warn(f"{os.fspath(path)}: {suffix} has no place for the input's comment lines; {len(lines)} not "
-                          f"written (the first: {lines[0][:60]!r}); .ply and .xyz keep them", stacklevel=2)
+                          f"written (the first: {lines[0][:60]!r}); .ply, .xyz and .obj keep them", stacklevel=2)
     try:
         writer(os.fspath(path), scan)
     except OSError as exc:  # a folder that cannot be created or written, a full disk

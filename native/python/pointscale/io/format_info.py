@@ -36,7 +36,7 @@ def check_format_info(info: dict, n_points: int) -> None:
         _check_ply(info, n_points)
     elif kind in ("las", "laz"):
         _check_las(info)
-    elif kind in ("xyz", "pts"):
+    elif kind in ("xyz", "pts", "obj"):
         _check(info, "comments", _single_lines, "a list of texts of one line each (they become comment lines)")
     elif kind == "e57":
         _check(info, "stations", lambda v: _list_of(v, dict) and all(map(_station, v)),

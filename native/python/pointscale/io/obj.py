@@ -25,9 +25,11 @@ import numpy as np
 
 from .atomic import atomic_write
 from .scan import Scan
+from .text import kept_comments
 from .text_tables import colour_for_text, numbers, polygons, read_text, savetxt, write_rows
 
 _COLOURS = ("red", "green", "blue")
+_WRITTEN_BY = "written by pointscale"
 # The values of a v line after x y z, by its width: the weight w, or a colour (with alpha).
 _V_EXTRAS = {3: (), 4: ("vertex_w",), 6: _COLOURS, 7: _COLOURS + ("alpha",)}
 _TEXTURE_NAMES = ("texture_u", "texture_v", "texture_w")
@@ -57,7 +59,8 @@ def read_obj(path) -> Scan:
         attributes.update({name: uv[:, i].copy() for i, name in enumerate(_TEXTURE_NAMES[:uv.shape[1]])})
     try:
         return Scan(points=points, precision=np.float64, normals=normals, vertex_attributes=attributes,
-                    faces=faces, format_info={"format": "obj"})
+                    faces=faces, format_info={"format": "obj", **({"comments": lines["comments"]}
+                                                                  if lines["comments"] else {})})
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
 
@@ -80,7 +83,9 @@ def write_obj(path, scan: Scan) -> None:
     if dropped:
         warnings.warn(f"{path}: OBJ has no place for {', '.join(dropped)}; not written", stacklevel=3)
     buffer = io.StringIO()
-    buffer.write("# written by pointscale\n")
+    buffer.write(f"# {_WRITTEN_BY}\n")
+    for comment in kept_comments(scan):  # a CRS, the scanner, the exporter: from OBJ, XYZ, PTS or PLY
+        buffer.write(f"# {comment}\n")
     savetxt(buffer, "v ", vertex, "%.17g")
     if scan.normals is not None:
         savetxt(buffer, "vn ", scan.normals, "%.17g")
@@ -116,8 +121,14 @@ def _lines(path: str) -> dict:
     lines = {"v": [], "vt": [], "vn": [], "f": []}
     seen = []  # per f line: the v, vt and vn lines above it, which its negative indices count back from
     others = {}
+    comments = []
     for line in text.splitlines():
         parts = line.split(None, 1)
+        if parts and parts[0].startswith("#"):
+            comment = line.strip().lstrip("#").strip()
+            if comment and comment != _WRITTEN_BY:
+                comments.append(comment)
+            continue
         if parts and parts[0] in lines:
             lines[parts[0]].append(parts[1].split("#", 1)[0] if len(parts) > 1 else "")
             if parts[0] == "f":
@@ -128,6 +139,7 @@ def _lines(path: str) -> dict:
         said = ", ".join(f"{count} {keyword}" for keyword, count in others.items())
         warnings.warn(f"{path}: OBJ lines other than v, vt, vn and f are not kept ({said})", stacklevel=4)
     lines["seen"] = np.array(seen, dtype=np.int64).reshape(-1, 3)
+    lines["comments"] = comments
     return lines
 
 

@@ -56,7 +56,7 @@ def write_ply(path, scan: Scan, binary: bool | None = None) -> None:
     if scan.n_faces:
         elements.append(_face_element(scan, info))
     comments, obj_info = list(info.get("comments", [])), list(info.get("obj_info", []))
-    if scan.format_info.get("format") in ("xyz", "pts"):  # a text file's comment lines (a CRS, the scanner)
+    if scan.format_info.get("format") in ("xyz", "pts", "obj"):  # a text file's comment lines (a CRS, the scanner)
         comments = list(scan.format_info.get("comments", []))
     ply = PlyData([e for e, _, _ in elements], text=text, byte_order=byte_order,
                   comments=[ascii_stand_in(c) for c in comments], obj_info=[ascii_stand_in(c) for c in obj_info])

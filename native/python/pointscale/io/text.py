@@ -499,10 +499,10 @@ def _format(values: np.ndarray) -> str:
 
 
 def kept_comments(scan: Scan) -> list:
-    """The comment lines a scan was read with that a text or PLY header can hold: an XYZ file's
-    comment lines, a PLY header's comments and obj_info lines (as "obj_info ...")."""
+    """The comment lines a scan was read with that a text or PLY header can hold: an XYZ, PTS or
+    OBJ file's comment lines, a PLY header's comments and obj_info lines (as "obj_info ...")."""
     info = scan.format_info
-    if info.get("format") not in ("xyz", "ply", "pts"):
+    if info.get("format") not in ("xyz", "ply", "pts", "obj"):
         return []
     lines = list(info.get("comments", [])) + [f"obj_info {c}" for c in info.get("obj_info", [])]
     return [c for c in lines if isinstance(c, str)]
