@@ -106,11 +106,7 @@ def layout_problem(mesh, k: int, old_k: int) -> str | None:
     for name in [level_name(l) for l in range(k)] + [band_name(l) for l in range(k)] + list(RESULTS):
         if name in kbs and name not in mine:
             return f"it has a shape key '{name}' of its own: rename it first, the decomposition writes that name"
-    for name in edited_layout_keys(mesh, mine):
-        if name + PREVIOUS in kbs and name + PREVIOUS not in mine:
-            return (f"it has a shape key '{name + PREVIOUS}' of its own, where the edited '{name}' would be kept: "
-                    "rename that key first")
-    return None
+    return copies_problem(mesh, edited_layout_keys(mesh, mine), mine)
 
 
 def result_problem(mesh, name: str, old_k: int) -> str | None:
@@ -351,16 +347,31 @@ def keep_edited_layout(obj, mine: set) -> list:
     it or removes it. Returns the names made. An artist's own key of such a name is never
     written over: ValueError (own_key_problem)."""
     edited = edited_layout_keys(obj.data, mine)
-    for name in edited:
-        problem = own_key_problem(obj.data, name + PREVIOUS, mine)
-        if problem:
-            raise ValueError(problem)
-    made = []
-    for name in edited:
-        ensure_key(obj, name + PREVIOUS, mesh_io.read_key(get(obj.data, name))).value = 0.0
-        mine.add(name + PREVIOUS)
-        made.append(name + PREVIOUS)
-    return made
+    problem = copies_problem(obj.data, edited, mine)
+    if problem:
+        raise ValueError(problem)
+    return [_keep_copy(obj, name, mesh_io.read_key(get(obj.data, name)), mine) for name in edited]
+
+
+def copies_problem(mesh, names, mine: set) -> str | None:
+    """Why the keys ``names`` cannot be kept as "<name> (previous)": the artist has a key of
+    such a name of their own (own_key_problem), or None."""
+    return next((p for p in (own_key_problem(mesh, name + PREVIOUS, mine) for name in names) if p), None)
+
+
+def to_keep(mesh, mine: set) -> list:
+    """The names of the keys a Clear (or a new Decompose) keeps as "(previous)": an edited
+    Level 0, the edited Level and Band keys above it, and the last results."""
+    names = [level_name(0)] if edited_base(mesh, mine) is not None else []
+    names += edited_layout_keys(mesh, mine)
+    return names + [name for name in (EDIT, FILTER) if name in mine and get(mesh, name) is not None]
+
+
+def _keep_copy(obj, name: str, co, mine: set) -> str:
+    """``co`` written into the key "<name> (previous)", switched off, as the add-on's."""
+    ensure_key(obj, name + PREVIOUS, co).value = 0.0
+    mine.add(name + PREVIOUS)
+    return name + PREVIOUS
 
 
 def key_fingerprint(mesh, name: str) -> str | None:
@@ -401,11 +412,10 @@ def keep_edited_base(obj, mine: set, written=None) -> bool:
     co = edited_base(obj.data, mine, written)
     if co is None:
         return False
-    problem = own_key_problem(obj.data, BASE_PREVIOUS, mine)
+    problem = copies_problem(obj.data, [level_name(0)], mine)
     if problem:
         raise ValueError(problem)
-    ensure_key(obj, BASE_PREVIOUS, co).value = 0.0
-    mine.add(BASE_PREVIOUS)
+    _keep_copy(obj, level_name(0), co, mine)
     return True
 
 

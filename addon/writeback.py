@@ -84,20 +84,7 @@ def clear_problem(obj) -> str | None:
     anything is removed."""
     mesh = obj.data
     mine = keys.owned(mesh, max(mesh.multiscale.n_bands, 0))
-    if keys.edited_base(mesh, mine) is not None:
-        problem = keys.own_key_problem(mesh, keys.BASE_PREVIOUS, mine)
-        if problem:
-            return problem
-    for name in keys.edited_layout_keys(mesh, mine):
-        problem = keys.own_key_problem(mesh, name + keys.PREVIOUS, mine)
-        if problem:
-            return problem
-    for name in (keys.EDIT, keys.FILTER):
-        if name in mine and keys.get(mesh, name) is not None:
-            problem = keys.own_key_problem(mesh, name + keys.PREVIOUS, mine)
-            if problem:
-                return problem
-    return None
+    return keys.copies_problem(mesh, keys.to_keep(mesh, mine), mine)
 
 
 def clear(obj) -> list:
