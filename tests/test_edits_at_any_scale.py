@@ -87,18 +87,20 @@ def lifts(centres, spacing):
 @pytest.mark.parametrize("key", [(name, decimation, kernel) for name, decimation in SHAPES for kernel in (1.0, 2.0)])
 def test_tall_handles_stand_on_the_lifted_base(handle_models, key):
     """Lifts half as high as wide and as high as wide (slopes up to 40 degrees). Measured up
-    to 1.65 degrees where the bound is 3 ("tall", decimation 0.2, kernel 1) and 2.47 where it is
-    6 (python bench/edits_bench.py --no-scans, 2026-12-06). The steep lifts are what needs each
+    to 1.63 degrees where the bound is 3 ("tall", decimation 0.2, kernel 1) and 2.48 where it is
+    6 (python bench/edits_bench.py --no-scans, 2026-12-07). The steep lifts are what needs each
     point hung from its foot: the base positions of a handle's top drift from its foot on the way
     down through the levels, and a steep lift stretches the base along its slope by
     1 / cos(slope); hung from those positions, the slender handles leaned 5.5 degrees.
 
-    By principal axes (the issue's measure), on the lifts half as high as wide: at most 0.89
-    degrees where the bound is 3 and 1.16 where it is 6. On the lifts as high as wide it is not
-    asserted: 3.31 ("tall", 0.2, kernel 1) and 3.36 ("slender", kernel 1) where the bound is 3,
-    so issue 16 stays open on them. The lift stretches a handle sideways, up to 1.5 times its
-    width, which leaves it less elongated, so the same lean (1.4-1.7 degrees) tilts its
-    principal axis twice as far."""
+    By principal axes (the issue's measure): on the lifts half as high as wide, at most 0.88
+    degrees where the bound is 3 and 1.16 where it is 6; on the lifts as high as wide, 2.77
+    ("slender", kernel 1) and 2.46. The lift stretches a handle sideways, up to 1.5 times its
+    width, which leaves it less elongated, so the same lean tilts its principal axis twice as
+    far. Each point keeps its offset's length from its own base position, which the lift
+    stretches away from its foot: turned towards its hung position from there, the handles'
+    principal axes leaned 3.31 ("tall", 0.2, kernel 1) and 3.36 ("slender", kernel 1); put on
+    the ray from its foot, only its height changes (reconstruction.cpp, hung_direction)."""
     points, handle, centres, dec, height = handle_models[key]
     assert np.ptp(dec.base[:, 2]) < 0.25 * height  # the handles are in the detail, not the base
     spacing = 0.5
@@ -110,9 +112,10 @@ def test_tall_handles_stand_on_the_lifted_base(handle_models, key):
             angles = handle_axis_angles(result, points, handle, centres, normal_at)
             bound = 3.0 if radius >= spacing else 6.0
             assert angles.max() < bound, (centre, radius, lift, angles.round(2))
-            if steepness == 0.5:  # the issue asks 3 / 6; held well within them (measured 0.89 / 1.16)
-                principal = handle_principal_axis_angles(result, handle, centres, normal_at)
-                assert principal.max() < min(bound, 1.5), (centre, radius, lift, principal.round(2))
+            principal = handle_principal_axis_angles(result, handle, centres, normal_at)
+            # the issue asks 3 / 6; measured 0.88 / 1.16 half as high, 2.77 / 2.46 as high as wide
+            limit = min(bound, 1.5) if steepness == 0.5 else 3.0
+            assert principal.max() < limit, (centre, radius, lift, principal.round(2))
 
 
 # Planes the requirement's figures were not tuned on: other sizes, handle counts, proportions
@@ -127,9 +130,11 @@ OTHER_PLANES = {  # (size, count, width, height, sample spacing, decimation, ker
 }
 
 
-# Lifts as high as wide (slopes up to 40 degrees) on the same planes. Measured 2026-12-06 at most
-# 2.44 degrees where the bound is 3 (the small 3 x 3 plane) and 2.57 where it is 6; by principal
-# axes 3.36 on the wide plane with kernel 2, which is not asserted (issue 16 stays open on it).
+# Lifts as high as wide (slopes up to 40 degrees) on the same planes. Measured 2026-12-07 at most
+# 2.45 degrees where the bound is 3 (the small 3 x 3 plane) and 2.58 where it is 6; by principal
+# axes 2.82 where it is 3 and 3.52 where it is 6, except 3.19 on the wide plane with kernel 2
+# where it is 3 (issue 16 stays open on it; 3.36 before points were put on their feet's rays):
+# there a handle on the plane's edge, on the lift's flank, leans 1.4 degrees by its axis.
 # With feet at the nearest base point in space instead of right below each point (before
 # 2026-12-06) the small plane gave 2.86: a handle's top stood on the crown of the base's bump
 # under it, off to one side. These move with the decomposition's last bits: before every CPU
@@ -161,9 +166,14 @@ def test_tall_handles_on_other_planes_stand_on_the_lifted_base(name, steepness):
             angles = handle_axis_angles(result, points, handle, centres, normal_at)
             bound = 3.0 if factor >= 1.0 else 6.0
             assert angles.max() < bound, (name, centre, radius, lift, angles.round(2))
+            principal = handle_principal_axis_angles(result, handle, centres, normal_at)
             if steepness == 0.5:  # the issue asks 3 / 6; held well within them (measured 1.22 / 1.63)
-                principal = handle_principal_axis_angles(result, handle, centres, normal_at)
-                assert principal.max() < min(bound, 2.0), (name, centre, radius, lift, principal.round(2))
+                limit = min(bound, 2.0)
+            elif name == "wide plane, 5 x 5, kernel 2" and bound == 3.0:  # not met: 3.19, see above
+                limit = 3.4
+            else:  # measured 2.82 / 3.52
+                limit = min(bound, 3.75)
+            assert principal.max() < limit, (name, centre, radius, lift, principal.round(2))
 
 def test_every_band_is_applied_along_the_lifted_surface_normal():
     """Requirement 2: a flat base with gentle detail, lifted; at every level the direction a

@@ -1,7 +1,9 @@
 #include "pointscale/reconstruction.h"
 #include "pointscale/validation.h"
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -22,6 +24,7 @@ namespace {
 struct HangFromFoot {
   Eigen::Index point;
   Vec3 base;   // the point's edited base position
+  Vec3 foot;   // its foot's edited base position
   Vec3 shift;  // what hanging it from its foot rigidly would add
 };
 
@@ -36,7 +39,7 @@ inline bool foot_shift(Eigen::Index i, Index f, const Points& original, const Po
   const Vec3 shift = (foot_edited - foot) - (base_edited - base) + (turn * span - span);
   // Nothing moved here: the identity, exactly, so a local edit leaves the rest as it was.
   if (shift.x() == 0.0 && shift.y() == 0.0 && shift.z() == 0.0) return false;
-  hang = {i, base_edited, shift};
+  hang = {i, base_edited, foot_edited, shift};
   return true;
 }
 
@@ -58,12 +61,50 @@ std::vector<HangFromFoot> hang_from_feet(const Points& original, const Points& e
   return all;
 }
 
-// Turns the point's offset from its base position towards where hanging it from its foot puts
-// it, keeping its length, and every kept level and normal of it by the same turn.
+// 0 at or below from, 1 at or above to, smooth in between.
+inline double smooth_step(double x, double from, double to) {
+  const double t = std::clamp((x - from) / (to - from), 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
+
+// Which way point h.point's offset from its edited base position goes, given its offset w
+// there before the turn (any length; only its direction is used). Hanging it from its foot
+// rigidly puts it at w + h.shift. A point well above its foot goes instead on the ray from its
+// foot through there, at w's length: the base positions of a tall feature's points lie off to
+// one side of its foot, and a steep edit stretches the base between the two by 1 / cos(slope),
+// so offsets turned towards the hung points from those positions, keeping their lengths, slid
+// sideways and the feature leaned; on the foot's ray only a point's height changes. The ray is
+// followed fully only where it is a feature's axis (the hung point lies at least twice as far
+// from the foot as the foot from the base position) and where it crosses the sphere of w's
+// length squarely (it passes within half of w's length of the base position), and not at all
+// where the point stands no farther from its foot than its base position does, or where the
+// ray passes 0.8 of w's length away (near a tangent, where the crossing swings with the least
+// change): between, the two directions are blended, so no point jumps.
+inline Vec3 hung_direction(const HangFromFoot& h, const Vec3& w) {
+  const Vec3 hung = w + h.shift;
+  const Vec3 from_foot = h.base + hung - h.foot, foot = h.foot - h.base;
+  const double reach = from_foot.norm(), length = w.norm(), hung_length = hung.norm();
+  if (!(reach > 0.0) || !(hung_length > 0.0)) return hung;
+  const Vec3 ray = from_foot / reach;
+  const double along = foot.dot(ray), apart2 = std::max(0.0, foot.squaredNorm() - along * along);
+  const double weight = smooth_step(reach / std::max(foot.norm(), 1e-300), 1.0, 2.0) *
+                        (1.0 - smooth_step(std::sqrt(apart2) / length, 0.5, 0.8));
+  if (!(weight > 0.0)) return hung;
+  // Where the ray crosses the sphere of w's length: the crossing nearer the hung point.
+  const double root = std::sqrt(std::max(0.0, length * length - apart2));
+  const double far = -along + root, near = -along - root;
+  const double s = near > 0.0 && std::abs(near - reach) < std::abs(far - reach) ? near : far;
+  if (!(s > 0.0)) return hung;
+  return (1.0 - weight) * (hung / hung_length) + weight * ((foot + s * ray) / length);
+}
+
+// Turns the point's offset from its base position to hung_direction, keeping its length, and
+// every kept level and normal of it by the same turn.
 inline void turn_towards_foot(const HangFromFoot& h, Points& p, Reconstruction* kept) {
   const Vec3 w = p.row(h.point).transpose() - h.base;
-  const Vec3 v = w + h.shift;
-  if (!(w.norm() > 0.0) || !(v.norm() > 0.0)) return;
+  if (!(w.norm() > 0.0)) return;
+  const Vec3 v = hung_direction(h, w);
+  if (!(v.norm() > 0.0)) return;
   const Mat3 q = Eigen::Quaterniond::FromTwoVectors(w, v).toRotationMatrix();
   p.row(h.point) = (h.base + q * w).transpose();
   if (!kept) return;
@@ -75,9 +116,9 @@ inline void turn_towards_foot(const HangFromFoot& h, Points& p, Reconstruction* 
 }
 
 // Turns each listed point's offset from its base position towards where hanging it from its
-// foot puts it (turn_towards_foot). A steep edit stretches the base along its slope, and the
-// base positions of a tall feature's top lie away from its foot: offsets hung from those
-// positions would lean with the stretch.
+// foot puts it (turn_towards_foot, hung_direction). A steep edit stretches the base along its
+// slope, and the base positions of a tall feature's top lie away from its foot: offsets hung
+// from those positions would lean with the stretch.
 void turn_towards_feet(const std::vector<HangFromFoot>& hang, Points& p, Reconstruction* kept) {
   parallel_for(hang.size(), [&](std::size_t b, std::size_t e) {
     for (std::size_t j = b; j < e; ++j) turn_towards_foot(hang[j], p, kept);
