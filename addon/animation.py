@@ -42,3 +42,22 @@ def animation_back_to(shape_keys, renamed: str, name: str) -> None:
     for curve in list(animation.drivers) + _fcurves(animation.action):
         if curve.data_path == old:
             curve.data_path = new
+
+
+def own_action(owner):
+    """A copy of ``owner`` (Object.copy(), Mesh.copy()) shares its original's action: a keyframe
+    put on the copy would change the original's animation. The copy gets its own copy of the
+    action, on the same slot (Blender 4.4 on), as Duplicate gives by default. Returns that copy,
+    or None where there was no action."""
+    animation = owner.animation_data if owner is not None else None
+    if animation is None or animation.action is None:
+        return None
+    slot = getattr(animation, "action_slot", None)
+    identifier = slot.identifier if slot is not None else None
+    copy = animation.action.copy()
+    animation.action = copy
+    if identifier is not None and getattr(animation, "action_slot", None) is None:
+        match = [s for s in copy.slots if s.identifier == identifier]
+        if match:
+            animation.action_slot = match[0]
+    return copy

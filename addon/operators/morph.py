@@ -5,7 +5,7 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
-from .. import compute, engine, keys, logic, mesh_io, state, storage, writeback
+from .. import animation, compute, engine, keys, logic, mesh_io, state, storage, writeback
 from ._background import RunsInBackground
 from ._common import set_mode
 
@@ -88,7 +88,9 @@ def _new_morph_object(context, a_obj, b_obj, p0, pa, pb):
     obj = a_obj.copy()
     obj.data = mesh
     obj.name = mesh.name
+    copies = []
     try:
+        copies = [c for c in (animation.own_action(obj), animation.own_action(mesh)) if c is not None]
         if mesh.shape_keys is not None:
             obj.shape_key_clear()
         _drop_decomposition(obj)
@@ -107,6 +109,8 @@ def _new_morph_object(context, a_obj, b_obj, p0, pa, pb):
     except Exception:
         bpy.data.objects.remove(obj)
         bpy.data.meshes.remove(mesh)
+        for action in copies:
+            bpy.data.actions.remove(action)
         raise
     return obj
 
