@@ -13,22 +13,41 @@ def band_animated(mesh, l: int) -> bool:
 
 
 def _animated(owner, path: str) -> bool:
-    """Whether ``owner``'s property at ``path`` has keyframes or a driver."""
+    """Whether ``owner``'s property at ``path`` has keyframes or a driver: in its action, in a
+    strip of its NLA tracks that is not muted, or as a driver."""
     animation = owner.animation_data if owner is not None else None
     if animation is None:
         return False
-    return any(c.data_path == path for c in list(animation.drivers) + _fcurves(animation.action))
+    return any(c.data_path == path for c in list(animation.drivers) + _own_fcurves(animation, with_nla=True))
 
 
-def _fcurves(action) -> list:
-    """An action's F-curves: Action.fcurves up to Blender 4.5, the layered action's channel
-    bags from 5.0 on (where Action.fcurves is gone)."""
+def _own_fcurves(animation, with_nla: bool = False) -> list:
+    """The F-curves that animate ``animation``'s owner: its action's (the slot it is assigned,
+    from Blender 4.4 on: an action shared by several objects keeps each one's curves in its own
+    slot) and, with_nla, those of its unmuted NLA strips'."""
+    curves = _fcurves(animation.action, getattr(animation, "action_slot", None))
+    if with_nla:
+        for track in animation.nla_tracks:
+            if track.mute:
+                continue
+            for strip in track.strips:
+                if not strip.mute:
+                    curves += _fcurves(strip.action, getattr(strip, "action_slot", None))
+    return curves
+
+
+def _fcurves(action, slot=None) -> list:
+    """An action's F-curves for ``slot``: a layered action's (Blender 4.4 on) channel bag of that
+    slot, or a legacy action's Action.fcurves (gone from 5.0 on)."""
     if action is None:
         return []
-    if hasattr(action, "fcurves"):
-        return list(action.fcurves)
-    return [c for layer in getattr(action, "layers", ()) for strip in layer.strips
-            for bag in getattr(strip, "channelbags", ()) for c in bag.fcurves]
+    layers = list(getattr(action, "layers", ()))
+    if layers:
+        if slot is None:
+            return []  # no slot assigned: the action animates nothing here
+        bags = [strip.channelbag(slot) for layer in layers for strip in layer.strips if hasattr(strip, "channelbag")]
+        return [c for bag in bags if bag is not None for c in bag.fcurves]
+    return list(getattr(action, "fcurves", ()))
 
 
 def animation_back_to(shape_keys, renamed: str, name: str) -> None:
@@ -39,7 +58,7 @@ def animation_back_to(shape_keys, renamed: str, name: str) -> None:
     if animation is None:
         return
     old, new = f'key_blocks["{renamed}"].value', f'key_blocks["{name}"].value'
-    for curve in list(animation.drivers) + _fcurves(animation.action):
+    for curve in list(animation.drivers) + _own_fcurves(animation):
         if curve.data_path == old:
             curve.data_path = new
 
