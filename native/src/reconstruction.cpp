@@ -87,14 +87,17 @@ inline Vec3 hung_direction(const HangFromFoot& h, const Vec3& w) {
   if (!(reach > 0.0) || !(hung_length > 0.0)) return hung;
   const Vec3 ray = from_foot / reach;
   const double along = foot.dot(ray), apart2 = std::max(0.0, foot.squaredNorm() - along * along);
+  // Where the ray leaves the sphere of w's length, s along it from the foot. Where it also
+  // enters the sphere ahead of the foot, that crossing is the nearer to the hung point only
+  // where the point stands nearer its foot than its base position does: weight 0 below.
+  const double s = -along + std::sqrt(std::max(0.0, length * length - apart2));
+  // A crossing behind the foot, or at it, is no place on the feature's axis: the weight fades
+  // out on the way there rather than dropping (the foot's span turned a quarter turn or more
+  // against its own turn, as in a crumpled base).
   const double weight = smooth_step(reach / std::max(foot.norm(), 1e-300), 1.0, 2.0) *
-                        (1.0 - smooth_step(std::sqrt(apart2) / length, 0.5, 0.8));
+                        (1.0 - smooth_step(std::sqrt(apart2) / length, 0.5, 0.8)) *
+                        smooth_step(s / reach, 0.0, 0.5);
   if (!(weight > 0.0)) return hung;
-  // Where the ray crosses the sphere of w's length: the crossing nearer the hung point.
-  const double root = std::sqrt(std::max(0.0, length * length - apart2));
-  const double far = -along + root, near = -along - root;
-  const double s = near > 0.0 && std::abs(near - reach) < std::abs(far - reach) ? near : far;
-  if (!(s > 0.0)) return hung;
   return (1.0 - weight) * (hung / hung_length) + weight * ((foot + s * ray) / length);
 }
 
