@@ -336,13 +336,14 @@ def levels_that_fit(n: int, levels: int, decimation: float, min_coarse: int,
                     parts: bool = False) -> tuple[int, str | None]:
     """The most levels (at most `levels`) whose coarsest keeps min_coarse of n points at this
     decimation, and what to tell the artist when that is fewer than asked: (levels, message).
-    With ``parts`` (Keep Parts Apart), n is the largest connected part's vertex count: each
-    part is decomposed alone, so the largest part bounds the levels, not the whole mesh.
+    With ``parts`` (Keep Parts Apart), n is the vertex count of the largest connected part that
+    is not flat: each part is decomposed alone, and a flat one keeps no bands, so that part
+    bounds the levels, not the whole mesh.
     Raises ValueError when not even a base and one band fit."""
     def fits(count: int) -> bool:
         return np.floor(decimation ** (count - 1) * n) >= min_coarse
 
-    what = "the largest part of the mesh" if parts else "the mesh"
+    what = "the largest part of the mesh that is not flat" if parts else "the mesh"
     apart = (", or turn off Keep Parts Apart to decompose the parts as one surface" if parts else "")
     fitting = max((count for count in range(2, levels + 1) if fits(count)), default=0)
     if fitting == levels:
@@ -360,10 +361,12 @@ def levels_that_fit(n: int, levels: int, decimation: float, min_coarse: int,
 
 
 PARTS_REFUSAL = "every connected part is too small"  # how the engine's refusal of too small parts begins
+# ... and of parts too small where the larger ones are flat (a ground plane beside a small rock)
+FLAT_PARTS_REFUSAL = "no connected part large enough to decompose spans a surface"
 
 
 def is_parts_refusal(message: str) -> bool:
-    return message.startswith(PARTS_REFUSAL)
+    return message.startswith(PARTS_REFUSAL) or message.startswith(FLAT_PARTS_REFUSAL)
 
 
 def parts_message(message: str, neighbors: int, levels: int) -> str:
@@ -372,6 +375,9 @@ def parts_message(message: str, neighbors: int, levels: int) -> str:
     engine's (faces and edges, levels=N); any other message as it is. Each part is decomposed
     alone, so its levels need Neighbours support points of that part, and the engine's counts
     alone can read as a contradiction (a largest part of 441 points refused where 32 are needed)."""
+    if message.startswith(FLAT_PARTS_REFUSAL):
+        return message.replace("decompose without faces and edges to treat the parts as one surface",
+                               "turn off Keep Parts Apart to decompose the parts as one surface")
     if not is_parts_refusal(message):
         return message
     found = re.search(r"the largest has (\d+) points", message)

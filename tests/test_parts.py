@@ -264,6 +264,50 @@ def test_flat_and_tiny_parts_keep_no_bands(big_sphere):
     assert np.abs(out[part > 0] - v[part > 0]).max() < 1e-12 * diagonal(v)
 
 
+def _rock_on_ground(segments, ground):
+    """A bumpy UV sphere (a rock) standing on a flat grid (ground x ground quads, 8 units wide),
+    two parts of one mesh: the ground has more vertices than the rock once ground > 44."""
+    rv, rf = meshes.uv_sphere(1.0, segments, segments // 2)
+    rv = meshes.bumpy(rv, 0.08, 3.0) + np.array([0.0, 0.0, 1.1])  # clear of the ground
+    gv, gf = meshes.grid(8.0, 8.0, ground, ground)
+    return meshes.joined((rv, rf), (gv, meshes.quads_to_triangles(gf)))
+
+
+@pytest.mark.parametrize("segments, ground", [(64, 60), (64, 100), (48, 80)])
+def test_a_flat_part_larger_than_the_surface_leaves_it_every_level(segments, ground):
+    """A ground plane with more vertices than the rock on it led the parts: the rock kept only
+    the levels its own size supports among the others (2 of 4, its Band 0 and 1 zero). The
+    leading part is the largest that spans a surface: the rock decomposes as it would alone,
+    and the ground keeps no bands, said to be flat."""
+    v, f, part = _rock_on_ground(segments, ground)
+    rock = part == 0
+    assert (~rock).sum() > rock.sum()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        dec = ps.decompose(v, 4, faces=f)
+    assert [p["levels"] for p in dec.parts] == [4, 1]
+    assert "spans no surface" in dec.parts[1]["why"]
+    alone = ps.decompose(v[rock], 4, faces=f[np.all(rock[f], axis=1)])
+    for l in range(dec.n_levels):
+        assert np.abs(dec.level(l)[rock] - alone.level(l)).max() < 1e-9 * diagonal(v[rock])
+    assert np.abs(dec.level(1)[rock] - dec.level(0)[rock]).max() > 0.05  # band 0 is the rock's own
+    coarse = [str(w.message) for w in caught if "a base this coarse" in str(w.message)]
+    assert all(f"of {rock.sum()};" in m for m in coarse), coarse  # level 0's coarseness is the rock's
+
+
+def test_a_surface_part_too_small_beside_a_larger_flat_one_is_told_what_levels_need():
+    """A small rock (482 vertices) on a larger ground was refused at every level count, since the
+    ground led; now levels=4 is refused with what a part needs, and levels=3 keeps the rock's 3."""
+    v, f, part = _rock_on_ground(32, 40)
+    assert (part == 0).sum() == 482 and (part == 1).sum() > 482
+    with pytest.raises(ValueError, match="a part needs at least 512 points"):
+        ps.decompose(v, 4, faces=f)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        dec = ps.decompose(v, 3, faces=f)
+    assert [p["levels"] for p in dec.parts] == [3, 1]
+
+
 def test_only_tiny_parts_is_a_clear_error():
     tris = np.random.default_rng(2).normal(size=(300, 3))
     faces = np.arange(300).reshape(-1, 3)

@@ -76,9 +76,13 @@ def _mirrored_otherwise_message(obj) -> str | None:
 
 
 def _largest_part(ps, points, edges) -> int:
-    """The vertex count of the largest of the parts Keep Parts Apart decomposes alone."""
-    labels, _count = ps.parts.connected_parts(points, edges=edges)
-    return int(np.bincount(labels).max())
+    """The vertex count of the part whose size bounds the levels when Keep Parts Apart
+    decomposes each part alone: the largest that spans a surface (a flat ground under a rock
+    keeps no bands, however large), else the largest."""
+    labels, count = ps.parts.connected_parts(points, edges=edges)
+    sizes = np.bincount(labels, minlength=count)
+    leading = ps.parts.leading_part(points, labels, count)
+    return int(sizes[leading] if leading is not None else sizes.max())
 
 
 def _prepare(op, context):

@@ -632,8 +632,7 @@ def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> 
                                options["tolerance"], options["max_iterations"], options["max_variation"])
     scale_space.validate()  # before the parts' sizes are weighed with them
     levels, decimation, neighbors = scale_space.levels, scale_space.decimation, scale_space.mls.neighbors
-    sizes = np.bincount(labels, minlength=count)
-    # decompose_parts refuses a largest part too small for the levels, as decompose refuses it alone
+    # decompose_parts refuses a leading part too small for the levels, as decompose refuses it alone
     require_extent(p)
     n_arr = as_normals_of(normals, p)
     origin = centre(p)
@@ -667,7 +666,9 @@ def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> 
         dec_settings["sheets"] = True
     dec = Decomposition(model, origin, dec_settings, _stats=stats, _missed_rays=missed)
     _require_finite_model(dec)
-    for message in (coarse_base_warning(int(sizes.max()), levels, decimation), parts_warning(reports, levels)):
+    # Level 0's coarseness is the leading part's: the largest decomposed with every level.
+    leading = max(len(idx) for idx, part_dec, _ in parts if part_dec is not None and part_dec.n_bands == levels - 1)
+    for message in (coarse_base_warning(leading, levels, decimation), parts_warning(reports, levels)):
         if message:
             warnings.warn(message, stacklevel=3)
     return dec

@@ -16,7 +16,8 @@ import numpy as np
 
 from . import _core
 
-#: A part other than the largest keeps a level only if it has this many support points there.
+#: A part other than the leading one (decompose_parts) keeps a level only if it has this many
+#: support points there.
 #: Measured on boxes, the worst case for a coarse level (tests/test_parts.py holds the bound):
 #: a box's level 0 strays from the input by about 1.6 / sqrt(support points) of its diagonal,
 #: 7% with 384 points, 12% with 216; 320 keeps it near 9%.
@@ -160,18 +161,20 @@ def _face_pairs(faces) -> np.ndarray:
     return np.stack([first, flat], axis=1)
 
 
-def levels_kept(sizes: np.ndarray, levels: int, decimation: float, neighbors: int, minimum: int) -> np.ndarray:
+def levels_kept(sizes: np.ndarray, levels: int, decimation: float, neighbors: int, minimum: int,
+                leading: int | None = None) -> np.ndarray:
     """Per part, how many of the levels asked its own resolution supports (1: the part itself
-    only, with no bands). The largest part (and any as large) keeps them all: it is decomposed
-    exactly as it would be alone, whatever smaller parts come with it (decompose_parts refuses
-    the call, as decompose refuses that part alone, when it is too small for them). Any other
-    part needs PART_COARSE_POINTS support points at its coarsest level."""
+    only, with no bands). The leading part (the largest that spans a surface; by default the
+    largest), and any as large, keeps them all: it is decomposed exactly as it would be alone,
+    whatever other parts come with it (decompose_parts refuses the call, as decompose refuses
+    that part alone, when it is too small for them). Any other part needs PART_COARSE_POINTS
+    support points at its coarsest level."""
     kept = np.ones(len(sizes), dtype=np.int64)
     for count in range(2, levels + 1):
         coarse = np.floor(decimation ** (count - 1) * sizes.astype(np.float64))
         kept[coarse >= max(minimum, neighbors, PART_COARSE_POINTS)] = count
     if len(sizes):
-        kept[sizes == sizes.max()] = max(levels, 1)
+        kept[sizes >= (sizes.max() if leading is None else sizes[leading])] = max(levels, 1)
     return kept
 
 
@@ -182,35 +185,43 @@ def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, leve
     threads: for the parts too small to decompose, which are joined here.
 
     decompose_one(points, normals, levels, progress) -> Decomposition decomposes one part.
-    The largest part is decomposed first and exactly as it would be alone: with every level
-    asked, or not at all (ValueError) when it is too small for them.
+    The leading part (the largest that spans a surface) is decomposed first and exactly as it
+    would be alone: with every level asked, or not at all (ValueError) when it is too small for
+    them.
     """
     order = np.argsort(labels, kind="stable")
     sizes = np.bincount(labels, minlength=count)
     bounds = np.concatenate([[0], np.cumsum(sizes)])
     need = _core.points_needed(_core.DecomposeOptions(levels=levels, decimation=decimation))
-    if sizes.max() < need:
+    by_size = sorted(range(count), key=lambda q: (-sizes[q], q))
+    leading, flat = _leading_part(p, order, bounds, by_size, need)
+    if leading is None:
+        if flat:
+            raise ValueError("no connected part large enough to decompose spans a surface (each is flat or on a "
+                             f"line): there is no detail to separate from a base. With levels={levels}, a part "
+                             f"needs at least {need} points (as it would alone): use fewer levels, or decompose "
+                             "without faces and edges to treat the parts as one surface")
         raise ValueError(f"every connected part is too small to decompose with levels={levels}: the largest has "
                          f"{sizes.max()} points, and levels={levels} needs at least {need} (as it would alone). "
                          "Use fewer levels, or decompose without faces and edges to treat the parts as one surface")
-    kept = levels_kept(sizes, levels, decimation, neighbors, minimum)
+    kept = levels_kept(sizes, levels, decimation, neighbors, minimum, leading)
     n, k = len(p), levels - 1
     total = float(n)
     done = 0
     parts = [None] * count
     # Each joined level holds one neighbourhood width: the first decomposed part's (the
-    # largest's, as it has them alone). A coarse level of it with fewer clusters than
+    # leading one's, as it has them alone). A coarse level of it with fewer clusters than
     # `neighbors` has narrower neighbourhoods, which a smaller part's levels cannot share.
     widths = None
-    for part in sorted(range(count), key=lambda q: (-sizes[q], q)):  # the largest first
+    for part in [leading] + [q for q in by_size if q != leading]:  # the leading part first
         idx = order[bounds[part]:bounds[part + 1]]  # ascending: argsort is stable
         points = p[idx]
         reason = None
-        if kept[part] >= 2 and not _spans_surface(points):
+        if kept[part] >= 2 and (part in flat or not _spans_surface(points)):
             reason = "it spans no surface (its points are on a line or a plane)"
             kept[part] = 1
         if kept[part] >= 2 and widths is not None and kept[part] < levels and min(widths) < neighbors:
-            reason = (f"levels={levels} leave the largest part only {min(widths)} support points at its coarsest "
+            reason = (f"levels={levels} leave the leading part only {min(widths)} support points at its coarsest "
                       f"level, fewer than neighbors={neighbors}, which the other parts' levels would need; "
                       "use fewer levels")
             kept[part] = 1
@@ -237,10 +248,34 @@ def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, leve
     arrays = _joined(p, normals, parts, k, widths, origin, threads)
     arrays["parts"] = np.ascontiguousarray(labels, dtype=np.int32)
     reports = [_part_report(part, idx, dec, reason, levels, p) for part, (idx, dec, reason) in enumerate(parts)]
-    stats = _joined_stats(parts, k, sizes)
+    stats = _joined_stats(parts, k, leading)
     if parts_out is not None:  # (point indices, Decomposition or None, reason) per part
         parts_out.extend(parts)
     return arrays, stats, reports
+
+
+def leading_part(p: np.ndarray, labels: np.ndarray, count: int) -> int | None:
+    """The part that decompose_parts decomposes first, with every level: the largest that spans
+    a surface (None: none does). p #P by 3; labels, count from connected_parts."""
+    order = np.argsort(labels, kind="stable")
+    sizes = np.bincount(labels, minlength=count)
+    bounds = np.concatenate([[0], np.cumsum(sizes)])
+    return _leading_part(p, order, bounds, sorted(range(count), key=lambda q: (-sizes[q], q)), 4)[0]
+
+
+def _leading_part(p, order, bounds, by_size, at_least: int) -> tuple[int | None, set]:
+    """(the largest part of at least at_least points that spans a surface, or None; the larger
+    parts found flat on the way). It keeps every level and sets the joined levels' widths. A flat
+    part (a ground plane under a rock) keeps no bands, however large: leading, it left the
+    surface parts only the levels their own sizes support."""
+    flat = set()
+    for part in by_size:
+        if bounds[part + 1] - bounds[part] < at_least:
+            break
+        if _spans_surface(p[order[bounds[part]:bounds[part + 1]]]):
+            return part, flat
+        flat.add(part)
+    return None, flat
 
 
 def _spans_surface(points: np.ndarray) -> bool:
@@ -356,10 +391,9 @@ def _part_report(part: int, idx: np.ndarray, dec, reason, levels: int, p: np.nda
                 why=reason or ("" if kept == levels else _TOO_FEW))
 
 
-def _joined_stats(parts, k: int, sizes) -> list[dict]:
+def _joined_stats(parts, k: int, leading: int) -> list[dict]:
     """The model's per-level report: counts summed over the parts, the kernel width of the
-    largest part, the worst consistency figures."""
-    largest = int(np.argmax(sizes))
+    leading part, the worst consistency figures."""
     stats = []
     for l in range(k):
         row = dict(support_points=0, kernel_width=0.0, not_converged=0, degenerate=0, consistency_iterations=0,
@@ -374,7 +408,7 @@ def _joined_stats(parts, k: int, sizes) -> list[dict]:
                 row[key] += int(s[key])
             row["consistency_iterations"] = max(row["consistency_iterations"], int(s["consistency_iterations"]))
             row["consistency_residual"] = max(row["consistency_residual"], float(s["consistency_residual"]))
-            if part == largest:
+            if part == leading:
                 row["kernel_width"] = float(s["kernel_width"])
         stats.append(row)
     return stats
