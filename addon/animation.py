@@ -12,6 +12,14 @@ def band_animated(mesh, l: int) -> bool:
             or _animated(mesh, f"multiscale.bands[{l}].gain"))
 
 
+def scale_animated(mesh, k: int) -> bool:
+    """Whether what shows the levels has keyframes or a driver: the panel's Scale slider (the
+    mesh's multiscale.scale) or a Level key's value. A result is shown alone at Scale k; they
+    set the levels' mix again on the next frame, under the result."""
+    return (_animated(mesh, "multiscale.scale")
+            or any(_animated(mesh.shape_keys, f'key_blocks["{keys.level_name(l)}"].value') for l in range(k)))
+
+
 def _animated(owner, path: str) -> bool:
     """Whether ``owner``'s property at ``path`` has keyframes or a driver: in its action, in a
     strip of its NLA tracks that is not muted, or as a driver."""

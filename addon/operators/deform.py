@@ -92,6 +92,7 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
             self.return_to_mode(obj)
             return {"CANCELLED"}
         writeback.show_result(obj, keys.EDIT, result)
+        warn_if_scale_animated(self, mesh, "Rebuild detail")
         report_folds(self, obj, folds, "Rebuilt the detail")
         unused = keys.unused_edits_message(mesh, "Rebuilt the detail")
         if unused:
@@ -149,6 +150,7 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
         if kept:
             keys.add_owned(mesh, keys.FILTER + keys.PREVIOUS)
         writeback.show_result(obj, keys.FILTER, result)
+        warn_if_scale_animated(self, mesh, "Bake filter")
         storage.store_baked_gains(mesh, gains, keys.key_fingerprint(mesh, keys.FILTER))
         if self.reset_bands:
             for l in range(k):
@@ -170,6 +172,15 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
                                   f"'{keys.FILTER + keys.PREVIOUS}'")
         self.return_to_mode(obj)
         return {"FINISHED"}
+
+
+def warn_if_scale_animated(op, mesh, what: str) -> None:
+    """A result is shown alone at Scale = the band count; keyframes or a driver on Scale or on a
+    Level key set the levels' mix again on the next frame, which then shows under the result."""
+    if animation.scale_animated(mesh, mesh.multiscale.n_bands):
+        op.report({"WARNING"}, f"{what}: the Scale slider or a Level key is keyframed or driven, so on the next "
+                               "frame the levels show again under the result: remove the keyframes or driver, or "
+                               f"key Scale at {mesh.multiscale.n_bands}")
 
 
 def _baked_gains_shown(mesh, k: int):

@@ -61,3 +61,27 @@ def test_another_objects_keyframes_in_a_shared_action_are_not_this_ones(capfd):
     assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
     out = capfd.readouterr().out
     assert "'Band 1' is keyframed or driven" in out and "'Band 0'" not in out, out
+
+
+def test_a_keyframed_scale_slider_is_warned_of_by_rebuild_and_bake(capfd):
+    """Rebuild Detail and Bake Filter show their result alone at Scale = the band count; keyframes
+    on Scale set it back on the next frame, and the levels showed under the result, unsaid."""
+    obj = _decomposed("A")
+    mesh = obj.data
+    mesh.multiscale.scale = 0.3
+    mesh.keyframe_insert("multiscale.scale", frame=1)
+    bpy.context.view_layer.objects.active = obj
+    capfd.readouterr()
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    said = [line for line in capfd.readouterr().out.splitlines() if "Scale slider or a Level key" in line]
+    assert len(said) == 2 and said[0].startswith("Warning: Rebuild detail") and "key Scale at 2" in said[0], said
+
+
+def test_an_unanimated_scale_slider_is_not_warned_of(capfd):
+    obj = _decomposed("A")
+    _keyframe_band(obj)  # a band's keyframes are not the Scale's
+    bpy.context.view_layer.objects.active = obj
+    capfd.readouterr()
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    assert "Scale slider" not in capfd.readouterr().out
