@@ -72,7 +72,12 @@ def decomposed_problem(obj) -> str | None:
                 "Shape Keys; the Level, Band and result keys show only as relative keys")
     k = mesh.multiscale.n_bands
     kbs = mesh.shape_keys.key_blocks
-    for name in [keys.level_name(l) for l in range(k)] + [keys.band_name(l) for l in range(k)]:
+    names = [keys.level_name(l) for l in range(k)] + [keys.band_name(l) for l in range(k)]
+    reference = mesh.shape_keys.reference_key.name
+    if reference in names or reference in keys.RESULTS:  # the first key is what the others move
+        return (f"the Basis key of '{obj.name}' was removed: '{reference}' is now the reference key, which "
+                "every other key moves from. Undo the removal, or Decompose again")
+    for name in names:
         if name not in kbs:
             return f"'{obj.name}' has no shape key '{name}' any more (removed or renamed): Decompose again"
     return None
