@@ -189,7 +189,7 @@ PYBIND11_MODULE(_core, m) {
         PythonProgress p(progress);
         Reconstruction r = without_gil(threads, [&] {
           Reconstruction out = has_base ? reconstruct_from_base(s, g, std::move(edited), keep_levels, upto, p.get(), kept)
-                                        : reconstruct(s, g, nullptr, keep_levels, upto, p.get());
+                                        : reconstruct(s, g, nullptr, keep_levels, upto, p.get(), kept);
           if (!origin.is_none()) {
             out.positions.rowwise() += o.transpose();
             for (Points& level : out.levels) level.rowwise() += o.transpose();

@@ -244,8 +244,9 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   // An unedited pass asked for its normals (keep_normals) leaves them in the same place.
   // At unit gains they may also come shared, found once for the model (KeptEdit).
   const bool cache = (turned && ws.kept) || (!edited && keep_normals);
-  const bool unit_gains = gains.cols() == 1 && (gains.array() == 1.0).all();
+  const bool unit_gains = all_unit(gains);
   const std::vector<Points>* shared = turned && unit_gains && ws.unit_normals ? ws.unit_normals.get() : nullptr;
+  const std::vector<Points>* orient = unit_gains ? nullptr : ws.unit_reference.get();
   const bool cached = shared || (turned && ws.unedited_normals.size() >= static_cast<std::size_t>(upto) &&
                                  ws.unedited_gains.rows() == gains.rows() && ws.unedited_gains.cols() == gains.cols() &&
                                  (ws.unedited_gains.array() == gains.array()).all());
@@ -314,7 +315,15 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
       Points& into = cache ? ws.unedited_normals[static_cast<std::size_t>(l)]
                            : previous == &ws.normals[0] ? ws.normals[1] : ws.normals[0];
       const LabelGroups* groups = static_cast<std::size_t>(l) < ws.groups.size() ? &ws.groups[l] : nullptr;
-      level_normals(fitted, s, *previous, stage, into, groups, ws.kept ? &ws.centroids : nullptr);
+      // The side of the unit gains' normal and the level's below together: near unit gains the
+      // first decides, where the level's below stands at right angles to it; near gain 0, where
+      // the level is fitted to nearly the level below's shape, the second. At unit gains the
+      // side is the one the level below gives, bit for bit (the two agree there).
+      const std::size_t at = static_cast<std::size_t>(l);
+      const bool both = orient && at < orient->size() && (*orient)[at].rows() == fitted.rows();
+      if (both) ws.reference = (*orient)[at] + *previous;
+      level_normals(fitted, s, both ? ws.reference : *previous, stage, into, groups,
+                    ws.kept ? &ws.centroids : nullptr);
       normals = &into;
     }
     const Points& nrm = *normals;
@@ -365,6 +374,17 @@ EditSupport edit_support(const Points& base, const IndexList& parts, const Point
   return edit;
 }
 
+bool all_unit(const Eigen::MatrixXd& gains) { return (gains.array() == 1.0).all(); }
+
+std::shared_ptr<const std::vector<Points>> unit_level_normals(const MultiscaleModel& model,
+                                                              const ProgressStage& progress) {
+  ReconstructionWorkspace workspace;
+  const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
+  Points finest = model.base;
+  reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, progress, workspace, true);
+  return std::make_shared<const std::vector<Points>>(std::move(workspace.unedited_normals));
+}
+
 KeptEdit find_kept_edit(const MultiscaleModel& model, const ProgressStage& progress, bool with_unit_normals) {
   // The feet need the unedited finest level. The pass that makes it fits the stored base's
   // level normals at unit gains, which are the ones an edited pass fits at those gains.
@@ -379,6 +399,16 @@ KeptEdit find_kept_edit(const MultiscaleModel& model, const ProgressStage& progr
     kept.unit_normals = std::make_shared<const std::vector<Points>>(std::move(workspace.unedited_normals));
   progress.report(1.0);
   return kept;
+}
+
+std::shared_ptr<const std::vector<Points>> EditMemo::unit_reference() const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return unit_reference_;
+}
+
+void EditMemo::keep_unit_reference(std::shared_ptr<const std::vector<Points>> found) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (!unit_reference_) unit_reference_ = std::move(found);
 }
 
 std::shared_ptr<const KeptEdit> EditMemo::get() const {
@@ -414,18 +444,29 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
                                   std::to_string(kept->support->feet.size()) + " points, not this one's " +
                                   std::to_string(model.base.rows()));
     if (!kept) {
-      // Without a memo, the normals at unit gains are of use to this call only at those gains
-      // (at others they cost memory).
-      const bool unit_gains = gains.cols() == 1 && (gains.array() == 1.0).all();
-      kept = std::make_shared<const KeptEdit>(find_kept_edit(model, all.sub(0.0, 2.0 / 3.0), memo || unit_gains));
+      // The normals at unit gains: read at those gains, and orienting every other gains'.
+      kept = std::make_shared<const KeptEdit>(find_kept_edit(model, all.sub(0.0, 2.0 / 3.0), true));
       if (memo) memo->keep(kept);
       found_here = true;
     }
     workspace.edit = kept->support;
     workspace.unit_normals = kept->unit_normals;
   }
+  double done = found_here ? 2.0 / 3.0 : 0.0;
+  // Gains other than 1 orient each level's normals by those at unit gains
+  // (ReconstructionWorkspace::unit_reference): found by one more unedited pass, unless kept.
+  if (!all_unit(gains) && model.bands() > 1 && upto != 0) {
+    std::shared_ptr<const std::vector<Points>> reference = workspace.unit_normals;
+    if (!reference && memo) reference = memo->unit_reference();
+    if (!reference) {
+      reference = unit_level_normals(model, all.sub(done, (done + 1.0) / 2.0));
+      done = (done + 1.0) / 2.0;
+    }
+    if (memo) memo->keep_unit_reference(reference);
+    workspace.unit_reference = std::move(reference);
+  }
   Reconstruction out;
-  const ProgressStage rest = all.sub(found_here ? 2.0 / 3.0 : 0.0, 1.0);
+  const ProgressStage rest = all.sub(done, 1.0);
   out.edit = reconstruct_levels_in_place(model, gains, p, edited, keep_levels ? &out : nullptr, upto, rest,
                                          workspace);
   out.positions = std::move(p);
@@ -438,7 +479,7 @@ Reconstruction reconstruct(const MultiscaleModel& model, const Eigen::MatrixXd& 
                            bool keep_levels, int upto, const ProgressCallback* progress, EditMemo* memo) {
   if (base) return reconstruct_from_base(model, gains, *base, keep_levels, upto, progress, memo);
   check_gains(gains, model.bands(), model.base.rows());
-  return reconstruct_levels(model, gains, model.base, false, keep_levels, upto, progress, nullptr);
+  return reconstruct_levels(model, gains, model.base, false, keep_levels, upto, progress, memo);
 }
 
 Reconstruction reconstruct_from_base(const MultiscaleModel& model, const Eigen::MatrixXd& gains, Points base,

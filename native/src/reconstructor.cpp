@@ -110,6 +110,8 @@ void Reconstructor::State::find_edit_support(const ProgressStage& progress) {
   Points finest = model.base;
   const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
   reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, progress.sub(0.0, 0.5), workspace, true);
+  if (!workspace.unit_reference)  // they orient the calls at other gains
+    workspace.unit_reference = std::make_shared<const std::vector<Points>>(workspace.unedited_normals);
   const EditSupport from = edit_support(in_model_order(model.base, order), parts,
                                         in_model_order(model.base_normals, order), in_model_order(finest, order));
   // Renumbered into a support of its own, which becomes the workspace's only once complete: a
@@ -163,6 +165,17 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
   if (edited && s.model.bands() > 0 && !s.workspace.edit) {
     s.find_edit_support(all.sub(0.0, 2.0 / 3.0));
     levels = all.sub(2.0 / 3.0, 1.0);
+  }
+  // Gains other than 1 orient each level's normals by those at unit gains
+  // (ReconstructionWorkspace::unit_reference), found once.
+  if (!all_unit(gains) && s.model.bands() > 1 && !s.workspace.unit_reference) {
+    // In this workspace's layout, as the edit support's pass finds them, so that they are
+    // reconstruct()'s bit for bit.
+    Points finest = s.model.base;
+    const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(s.model.bands(), 1);
+    reconstruct_levels_in_place(s.model, ones, finest, false, nullptr, -1, levels.sub(0.0, 0.5), s.workspace, true);
+    s.workspace.unit_reference = std::make_shared<const std::vector<Points>>(s.workspace.unedited_normals);
+    levels = levels.sub(0.5, 1.0);
   }
   const Eigen::MatrixXd* g = &gains;
   if (gains.cols() > 1) {

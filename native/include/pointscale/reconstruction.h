@@ -33,10 +33,15 @@ class EditMemo {
  public:
   std::shared_ptr<const KeptEdit> get() const;
   void keep(std::shared_ptr<const KeptEdit> found);
+  // The stored base's level normals at unit gains, which orient the calls at other gains, kept
+  // by the first of them that is not edited (an edited one finds them with the KeptEdit).
+  std::shared_ptr<const std::vector<Points>> unit_reference() const;
+  void keep_unit_reference(std::shared_ptr<const std::vector<Points>> found);
 
  private:
   mutable std::mutex mutex_;
   std::shared_ptr<const KeptEdit> kept_;
+  std::shared_ptr<const std::vector<Points>> unit_reference_;
 };
 
 // gains     k by 1 (per band) or k by #P (per point); band l is scaled by its gain
@@ -44,7 +49,8 @@ class EditMemo {
 //           the model, bit for bit what fitting them again gives)
 // upto      reconstruct levels 0..upto only (upto <= k)
 // memo      the model's EditMemo, or nullptr: every call on an edited base then finds what the
-//           edit needs afresh (the rings, planes and feet of edit_rotations.h)
+//           edit needs afresh (the rings, planes and feet of edit_rotations.h), and every call
+//           at gains other than 1 the level normals at unit gains, which orient its own
 // Each call allocates its own working arrays. A caller that reconstructs one model over and
 // over keeps a Reconstructor (reconstructor.h), which also keeps those and lays the model out
 // in a spatial order. Results are bit for bit the same with a memo or without.

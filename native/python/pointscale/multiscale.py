@@ -123,7 +123,9 @@ class Decomposition:
         The core adds the origin in place (a NumPy sum would allocate every level again).
         An edited base: what every edit needs is found on the first such call and kept with
         this decomposition (the core's EditMemo), so the calls after it cost the edited pass."""
-        memo = None if base is None else self._kept("edit", _core.EditMemo)
+        # Gains other than 1 read the level normals at unit gains too (they orient the others'),
+        # kept in the same memo.
+        memo = None if base is None and (gains == 1.0).all() else self._kept("edit", _core.EditMemo)
         return self._model.reconstruct(gains, base=base, keep_levels=keep_levels, progress=progress,
                                        origin=self.origin, threads=threads, memo=memo)
 

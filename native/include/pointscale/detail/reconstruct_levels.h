@@ -32,6 +32,14 @@ struct KeptEdit {
   std::shared_ptr<const std::vector<Points>> unit_normals;  // or null: fitted by each call
 };
 
+// The stored base's level normals at unit gains, levels 1..k-1 (row 0 empty): one unedited
+// pass (ReconstructionWorkspace::unit_reference).
+std::shared_ptr<const std::vector<Points>> unit_level_normals(const MultiscaleModel& model,
+                                                              const ProgressStage& progress);
+
+// Whether gains (k by 1 or k by #P) are all 1.
+bool all_unit(const Eigen::MatrixXd& gains);
+
 // Finds it: a pass over the stored base's levels at unit gains (for the feet, and the
 // normals when with_unit_normals), then the support. Progress as two passes over the levels.
 KeptEdit find_kept_edit(const MultiscaleModel& model, const ProgressStage& progress, bool with_unit_normals);
@@ -63,6 +71,14 @@ struct ReconstructionWorkspace {
   std::vector<Points> unedited_normals;
   // Or, at unit gains, those normals found once for the model and shared (KeptEdit): read only.
   std::shared_ptr<const std::vector<Points>> unit_normals;
+  // At other gains, the stored base's level normals at unit gains (levels 1..levels - 1, as
+  // unit_level_normals gives them): each level's normals take the side of the sum of these and
+  // the level's below (reference). Where detail stands on a wall, a level's normals are at
+  // right angles to the level's below, and the side taken from those alone was a toss-up that
+  // a gain of 1.001 turned over (band offsets then flipped, and points jumped 1-4% of the
+  // model). Null at unit gains, which need none: the normals are these.
+  std::shared_ptr<const std::vector<Points>> unit_reference;
+  Points reference;
   bool kept = false;  // kept between calls: the unedited normals are worth keeping
   LastEdit last;      // kept between calls: the last edited call
 };
