@@ -299,6 +299,50 @@ def _checksum(co) -> str:
 _BASIS_CHECKSUM = "(Basis)"  # in WRITTEN_LAYOUT: the Basis the keys were written over
 
 
+def _written_checksums(mesh) -> dict | None:
+    """What Decompose wrote into each Level (above 0) and Band key, by name, or None where that
+    is unknown (a decomposition made before the checksums were kept) or no key can be compared
+    with it (the Basis changed since, and Blender carried that into every relative key)."""
+    written = mesh.get(WRITTEN_LAYOUT)
+    if written is None:
+        return None
+    basis = written.get(_BASIS_CHECKSUM)
+    if basis is not None and _checksum(mesh_io.read_basis(mesh)) != basis:
+        return None
+    return {name: checksum for name, checksum in written.items() if name != _BASIS_CHECKSUM}
+
+
+def renamed_layout_keys(mesh, among=None) -> list:
+    """(name, written as) for each key that holds exactly what Decompose wrote into another Level
+    or Band key: a key of the add-on's renamed, or two of them swapped. Sliders and bakes read
+    each band by its name, so such a key is read as the wrong band, or not at all. among: the
+    names to look at (each read once more), or None for every key once a Level or Band key of
+    the add-on's is missing (else none can be a renamed one)."""
+    written = _written_checksums(mesh)
+    kbs = key_blocks(mesh)
+    if not written or kbs is None:
+        return []
+    if among is None:
+        if all(name in kbs for name in written):
+            return []
+        among = [kb.name for kb in kbs if kb != mesh.shape_keys.reference_key]
+    by_checksum = {}
+    for name, checksum in written.items():
+        by_checksum.setdefault(checksum, []).append(name)
+    found = []
+    for name in among:
+        kb = kbs.get(name)
+        if kb is None:
+            continue
+        checksum = _checksum(mesh_io.read_key(kb))
+        if written.get(name) == checksum:
+            continue  # as written
+        others = [other for other in by_checksum.get(checksum, ()) if other != name]
+        if len(others) == 1:  # a key that matches several (two zero bands) tells nothing
+            found.append((name, others[0]))
+    return found
+
+
 def edited_layout_keys(mesh, mine: set) -> list:
     """The add-on's Level keys above 0 and Band keys whose positions differ from what Decompose
     wrote (none for a decomposition made before the checksums were kept). None either once the
@@ -320,17 +364,28 @@ def edited_layout_keys(mesh, mine: set) -> list:
     return edited
 
 
-def unused_edits_message(mesh, done: str) -> str | None:
-    """The warning for Level (above 0) and Band keys edited since Decompose, which nothing
-    reads, or None."""
+def layout_messages(mesh, done: str) -> list:
+    """The warnings for Level (above 0) and Band keys changed since Decompose: renamed or
+    swapped ones (holding what another was written with), which sliders and bakes read as the
+    wrong band, and edited ones, which nothing reads."""
     edited = edited_layout_keys(mesh, owned(mesh, mesh.multiscale.n_bands))
-    if not edited:
-        return None
-    names = ", ".join(repr(name) for name in edited)
-    return (f"{done}, but {names} {'was' if len(edited) == 1 else 'were'} edited since Decompose and "
+    renamed = renamed_layout_keys(mesh, among=edited) if edited else []
+    moved = {name for name, _ in renamed}
+    edited = [name for name in edited if name not in moved]
+    messages = []
+    if renamed:
+        said = ", ".join(f"{name!r} holds what Decompose wrote as {was!r}" for name, was in renamed)
+        messages.append(f"{done}, but {said}: a key of the add-on's was renamed, or two were swapped. Each band's "
+                        "slider, the Gain sliders and Bake Filter read a band by its key's name, so they no longer "
+                        "agree: rename the keys back")
+    if edited:
+        names = ", ".join(repr(name) for name in edited)
+        messages.append(
+            f"{done}, but {names} {'was' if len(edited) == 1 else 'were'} edited since Decompose and "
             f"{'is' if len(edited) == 1 else 'are'} not used: only '{level_name(0)}' is the base it builds on "
             f"(Edit Base edits it). A new Decompose or Clear keeps "
             f"{'it as ' + repr(edited[0] + PREVIOUS) if len(edited) == 1 else 'each as <name>' + PREVIOUS}")
+    return messages
 
 
 def is_edited_layout_copy(name: str) -> bool:

@@ -252,8 +252,18 @@ class POINTSCALE_OT_decompose(RunsInBackground, bpy.types.Operator):
         if problem:
             self.report({"ERROR"}, f"Decompose: {problem}; nothing was written")
             return {"CANCELLED"}
+        # Keys of the earlier decomposition renamed to names of the artist's stay, and so does
+        # their value: over the new decomposition they apply again.
+        layout_names = {keys.level_name(l) for l in range(layout.k)} | {keys.band_name(l) for l in range(layout.k)}
+        applied = [(name, was, keys.get(obj.data, name).value) for name, was in keys.renamed_layout_keys(obj.data)
+                   if name not in layout_names and not keys.get(obj.data, name).mute
+                   and keys.get(obj.data, name).value != 0.0]
         kept = writeback.apply_layout(obj, layout, basis=points, data=data)
         k = layout.k
+        for name, was, value in applied:
+            self.report({"WARNING"}, f"Decompose '{obj.name}': {name!r} holds the earlier decomposition's {was!r} "
+                                     f"(renamed) and still applies, at {value:g}, over the new one: set it to 0 "
+                                     "or delete it")
         if keys.BASE_PREVIOUS in kept:
             self.report({"INFO"}, f"Decompose '{obj.name}': the earlier 'Level 0', changed since it was written (an "
                                   "edit, or a change of the Basis or of the mesh that Blender carried into it), is "

@@ -94,9 +94,8 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
         writeback.show_result(obj, keys.EDIT, result)
         warn_if_scale_animated(self, mesh, "Rebuild detail")
         report_folds(self, obj, folds, "Rebuilt the detail")
-        unused = keys.unused_edits_message(mesh, "Rebuilt the detail")
-        if unused:
-            self.report({"WARNING"}, unused)
+        for message in keys.layout_messages(mesh, "Rebuilt the detail"):
+            self.report({"WARNING"}, message)
         self.return_to_mode(obj)
         return {"FINISHED"}
 
@@ -164,9 +163,8 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
                                          "comes back on the next frame and the band applies twice (baked and live): "
                                          "remove the keyframes or driver, or set the slider to 0 in them")
         report_folds(self, obj, folds, f"Baked gains ({_gains_text(values)}){_on_top_text(baked)} into '{keys.FILTER}'")
-        unused = keys.unused_edits_message(mesh, "Bake filter: baked")
-        if unused:
-            self.report({"WARNING"}, unused)
+        for message in keys.layout_messages(mesh, "Bake filter: baked"):
+            self.report({"WARNING"}, message)
         if kept:
             self.report({"INFO"}, f"Bake filter: the earlier bake, switched off, is kept as "
                                   f"'{keys.FILTER + keys.PREVIOUS}'")
