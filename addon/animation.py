@@ -88,3 +88,23 @@ def own_action(owner):
         if match:
             animation.action_slot = match[0]
     return copy
+
+
+def drop_curves(owner, prefix: str) -> None:
+    """Removes the F-curves of ``owner``'s own action whose data path starts with ``prefix``:
+    a copy's curves of properties it no longer has (a morph's mesh, without A's decomposition)."""
+    animation = owner.animation_data if owner is not None else None
+    action = animation.action if animation is not None else None
+    if action is None:
+        return
+    slot = getattr(animation, "action_slot", None)
+    layers = list(getattr(action, "layers", ()))
+    if layers:
+        bags = [strip.channelbag(slot) for layer in layers for strip in layer.strips
+                if slot is not None and hasattr(strip, "channelbag")]
+        owners = [bag.fcurves for bag in bags if bag is not None]
+    else:
+        owners = [action.fcurves] if hasattr(action, "fcurves") else []
+    for curves in owners:
+        for curve in [c for c in curves if c.data_path.startswith(prefix)]:
+            curves.remove(curve)

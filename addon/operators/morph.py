@@ -94,6 +94,7 @@ def _new_morph_object(context, a_obj, b_obj, p0, pa, pb):
         if mesh.shape_keys is not None:
             obj.shape_key_clear()
         _drop_decomposition(obj)
+        animation.drop_curves(mesh, "multiscale.")  # A's gain and Scale sliders: none here
         mesh_io.write_vertices(mesh, p0)
         obj.show_only_shape_key = False  # A's Shape Key Lock would hide the morph's keys
         _shown_collection(context, a_obj).objects.link(obj)

@@ -39,3 +39,26 @@ def test_a_morph_of_an_object_without_animation_gets_none():
     morph = h.morph_onto_bumpy_b(a)
     assert morph.animation_data is None or morph.animation_data.action is None
     assert len(bpy.data.actions) == actions
+
+
+def test_the_morph_mesh_keeps_no_curves_of_a_decomposition_it_does_not_have():
+    a = h.mesh_object(h.noisy_sphere(3000), name="A")
+    h.decompose(a, levels=3)
+    a.data.keyframe_insert("multiscale.bands[0].gain", frame=1)
+    a.data.keyframe_insert("multiscale.scale", frame=1)
+    morph = h.morph_onto_bumpy_b(a)
+    assert _curve_paths(morph.data) == []
+    assert sorted(_curve_paths(a.data)) == ["multiscale.bands[0].gain", "multiscale.scale"]  # A keeps its own
+
+
+def _curve_paths(owner) -> list:
+    """The data paths of the F-curves in ``owner``'s action (its slot's, from Blender 4.4 on)."""
+    animation = owner.animation_data
+    action = animation.action if animation is not None else None
+    if action is None:
+        return []
+    layers = list(getattr(action, "layers", ()))
+    if layers:
+        bags = [strip.channelbag(animation.action_slot) for layer in layers for strip in layer.strips]
+        return [c.data_path for bag in bags if bag is not None for c in bag.fcurves]
+    return [c.data_path for c in action.fcurves]
