@@ -45,8 +45,13 @@ def _own_fcurves(animation, with_nla: bool = False) -> list:
 
 
 def _fcurves(action, slot=None) -> list:
-    """An action's F-curves for ``slot``: a layered action's (Blender 4.4 on) channel bag of that
-    slot, or a legacy action's Action.fcurves (gone from 5.0 on)."""
+    """An action's F-curves for ``slot`` (_curve_collections)."""
+    return [c for curves in _curve_collections(action, slot) for c in curves]
+
+
+def _curve_collections(action, slot=None) -> list:
+    """The F-curve collections of an action for ``slot``: a layered action's (Blender 4.4 on)
+    channel bags of that slot, or a legacy action's Action.fcurves (gone from 5.0 on)."""
     if action is None:
         return []
     layers = list(getattr(action, "layers", ()))
@@ -54,8 +59,8 @@ def _fcurves(action, slot=None) -> list:
         if slot is None:
             return []  # no slot assigned: the action animates nothing here
         bags = [strip.channelbag(slot) for layer in layers for strip in layer.strips if hasattr(strip, "channelbag")]
-        return [c for bag in bags if bag is not None for c in bag.fcurves]
-    return list(getattr(action, "fcurves", ()))
+        return [bag.fcurves for bag in bags if bag is not None]
+    return [action.fcurves] if hasattr(action, "fcurves") else []
 
 
 def animation_back_to(shape_keys, renamed: str, name: str) -> None:
@@ -94,17 +99,8 @@ def drop_curves(owner, prefix: str) -> None:
     """Removes the F-curves of ``owner``'s own action whose data path starts with ``prefix``:
     a copy's curves of properties it no longer has (a morph's mesh, without A's decomposition)."""
     animation = owner.animation_data if owner is not None else None
-    action = animation.action if animation is not None else None
-    if action is None:
+    if animation is None:
         return
-    slot = getattr(animation, "action_slot", None)
-    layers = list(getattr(action, "layers", ()))
-    if layers:
-        bags = [strip.channelbag(slot) for layer in layers for strip in layer.strips
-                if slot is not None and hasattr(strip, "channelbag")]
-        owners = [bag.fcurves for bag in bags if bag is not None]
-    else:
-        owners = [action.fcurves] if hasattr(action, "fcurves") else []
-    for curves in owners:
+    for curves in _curve_collections(animation.action, getattr(animation, "action_slot", None)):
         for curve in [c for c in curves if c.data_path.startswith(prefix)]:
             curves.remove(curve)

@@ -66,10 +66,7 @@ def decompose(ps, points: np.ndarray, progress=None, smoother="MLS", encoding="P
     levels_asked, decimation = kwargs.get("levels", 4), kwargs.get("decimation", 0.25)
     dec = run_decompose(ps, points, smoother, encoding, progress=progress, **kwargs)
     parts = dec.parts or []
-    # Level 0's coarseness is the leading part's: the largest with every level (a larger flat
-    # part keeps none).
-    most = max((part["levels"] for part in parts), default=0)
-    leading = max((part["points"] for part in parts if part["levels"] == most), default=len(points))
+    leading = ps.parts.leading_points(parts) if parts else len(points)  # a larger flat part keeps no levels
     messages = [ps.coarse_base_warning(leading, levels_asked, decimation)]
     if parts:
         messages.append(ps.parts.parts_warning(parts, levels_asked))

@@ -255,9 +255,9 @@ class POINTSCALE_OT_decompose(RunsInBackground, bpy.types.Operator):
         # Keys of the earlier decomposition renamed to names of the artist's stay, and so does
         # their value: over the new decomposition they apply again.
         layout_names = {keys.level_name(l) for l in range(layout.k)} | {keys.band_name(l) for l in range(layout.k)}
-        applied = [(name, was, keys.get(obj.data, name).value) for name, was in keys.renamed_layout_keys(obj.data)
-                   if name not in layout_names and not keys.get(obj.data, name).mute
-                   and keys.get(obj.data, name).value != 0.0]
+        renamed = [(keys.get(obj.data, name), was) for name, was in keys.renamed_layout_keys(obj.data)
+                   if name not in layout_names]
+        applied = [(kb.name, was, kb.value) for kb, was in renamed if not kb.mute and kb.value != 0.0]
         kept = writeback.apply_layout(obj, layout, basis=points, data=data)
         k = layout.k
         for name, was, value in applied:

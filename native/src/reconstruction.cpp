@@ -376,27 +376,28 @@ EditSupport edit_support(const Points& base, const IndexList& parts, const Point
 
 bool all_unit(const Eigen::MatrixXd& gains) { return (gains.array() == 1.0).all(); }
 
-std::shared_ptr<const std::vector<Points>> unit_level_normals(const MultiscaleModel& model,
-                                                              const ProgressStage& progress) {
-  ReconstructionWorkspace workspace;
+Points unit_pass(const MultiscaleModel& model, const ProgressStage& progress, ReconstructionWorkspace& workspace) {
   const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
   Points finest = model.base;
   reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, progress, workspace, true);
+  return finest;
+}
+
+std::shared_ptr<const std::vector<Points>> unit_level_normals(const MultiscaleModel& model,
+                                                              const ProgressStage& progress) {
+  ReconstructionWorkspace workspace;
+  unit_pass(model, progress, workspace);
   return std::make_shared<const std::vector<Points>>(std::move(workspace.unedited_normals));
 }
 
-KeptEdit find_kept_edit(const MultiscaleModel& model, const ProgressStage& progress, bool with_unit_normals) {
+KeptEdit find_kept_edit(const MultiscaleModel& model, const ProgressStage& progress) {
   // The feet need the unedited finest level. The pass that makes it fits the stored base's
   // level normals at unit gains, which are the ones an edited pass fits at those gains.
   ReconstructionWorkspace workspace;
-  const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
-  Points finest = model.base;
-  reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, progress.sub(0.0, 0.5), workspace,
-                              with_unit_normals);
+  const Points finest = unit_pass(model, progress.sub(0.0, 0.5), workspace);
   KeptEdit kept;
   kept.support = std::make_shared<const EditSupport>(edit_support(model.base, model.parts, model.base_normals, finest));
-  if (with_unit_normals)
-    kept.unit_normals = std::make_shared<const std::vector<Points>>(std::move(workspace.unedited_normals));
+  kept.unit_normals = std::make_shared<const std::vector<Points>>(std::move(workspace.unedited_normals));
   progress.report(1.0);
   return kept;
 }
@@ -445,7 +446,7 @@ Reconstruction reconstruct_levels(const MultiscaleModel& model, const Eigen::Mat
                                   std::to_string(model.base.rows()));
     if (!kept) {
       // The normals at unit gains: read at those gains, and orienting every other gains'.
-      kept = std::make_shared<const KeptEdit>(find_kept_edit(model, all.sub(0.0, 2.0 / 3.0), true));
+      kept = std::make_shared<const KeptEdit>(find_kept_edit(model, all.sub(0.0, 2.0 / 3.0)));
       if (memo) memo->keep(kept);
       found_here = true;
     }

@@ -22,6 +22,16 @@ struct Reconstructor::State {
   // What an edit needs (EditSupport), found in the model's own numbering, so that rings with
   // neighbours at equal distances list them as reconstruct() does, then renumbered.
   void find_edit_support(const ProgressStage& progress);
+
+  // unit_pass in this workspace's layout, so that its normals are reconstruct()'s bit for bit:
+  // the finest level at unit gains; its level normals orient the calls at other gains
+  // (ReconstructionWorkspace::unit_reference), kept from the first such pass on.
+  Points unit_pass_keeping_reference(const ProgressStage& progress) {
+    Points finest = unit_pass(model, progress, workspace);
+    if (!workspace.unit_reference)
+      workspace.unit_reference = std::make_shared<const std::vector<Points>>(workspace.unedited_normals);
+    return finest;
+  }
 };
 
 namespace {
@@ -107,11 +117,7 @@ void Reconstructor::State::find_edit_support(const ProgressStage& progress) {
   // The unedited finest level, as reconstruct() finds it: this model's level loop gives it bit
   // for bit, in this order. Its level normals are those of unit gains, kept for the edited calls
   // at those gains (the cache holds one set of gains' normals anyway).
-  Points finest = model.base;
-  const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(model.bands(), 1);
-  reconstruct_levels_in_place(model, ones, finest, false, nullptr, -1, progress.sub(0.0, 0.5), workspace, true);
-  if (!workspace.unit_reference)  // they orient the calls at other gains
-    workspace.unit_reference = std::make_shared<const std::vector<Points>>(workspace.unedited_normals);
+  const Points finest = unit_pass_keeping_reference(progress.sub(0.0, 0.5));
   const EditSupport from = edit_support(in_model_order(model.base, order), parts,
                                         in_model_order(model.base_normals, order), in_model_order(finest, order));
   // Renumbered into a support of its own, which becomes the workspace's only once complete: a
@@ -169,12 +175,7 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
   // Gains other than 1 orient each level's normals by those at unit gains
   // (ReconstructionWorkspace::unit_reference), found once.
   if (!all_unit(gains) && s.model.bands() > 1 && !s.workspace.unit_reference) {
-    // In this workspace's layout, as the edit support's pass finds them, so that they are
-    // reconstruct()'s bit for bit.
-    Points finest = s.model.base;
-    const Eigen::MatrixXd ones = Eigen::MatrixXd::Ones(s.model.bands(), 1);
-    reconstruct_levels_in_place(s.model, ones, finest, false, nullptr, -1, levels.sub(0.0, 0.5), s.workspace, true);
-    s.workspace.unit_reference = std::make_shared<const std::vector<Points>>(s.workspace.unedited_normals);
+    s.unit_pass_keeping_reference(levels.sub(0.0, 0.5));
     levels = levels.sub(0.5, 1.0);
   }
   const Eigen::MatrixXd* g = &gains;

@@ -629,7 +629,7 @@ def _missed_rays_of_parts(parts, bands: int) -> list:
 
 def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> Decomposition:
     """decompose() of each connected part alone, joined into one Decomposition (pointscale.parts)."""
-    from .parts import decompose_parts, parts_warning
+    from .parts import decompose_parts, leading_points, parts_warning
     scale_space = _scale_space(levels, options["decimation"], options["kernel"], options["neighbors"],
                                options["tolerance"], options["max_iterations"], options["max_variation"])
     scale_space.validate()  # before the parts' sizes are weighed with them
@@ -668,9 +668,7 @@ def _decompose_by_part(p, labels, count, levels, normals, options, progress) -> 
         dec_settings["sheets"] = True
     dec = Decomposition(model, origin, dec_settings, _stats=stats, _missed_rays=missed)
     _require_finite_model(dec)
-    # Level 0's coarseness is the leading part's: the largest decomposed with every level.
-    leading = max(len(idx) for idx, part_dec, _ in parts if part_dec is not None and part_dec.n_bands == levels - 1)
-    for message in (coarse_base_warning(leading, levels, decimation), parts_warning(reports, levels)):
+    for message in (coarse_base_warning(leading_points(reports), levels, decimation), parts_warning(reports, levels)):
         if message:
             warnings.warn(message, stacklevel=3)
     return dec

@@ -217,7 +217,7 @@ def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, leve
         idx = order[bounds[part]:bounds[part + 1]]  # ascending: argsort is stable
         points = p[idx]
         reason = None
-        if kept[part] >= 2 and (part in flat or not _spans_surface(points)):
+        if kept[part] >= 2 and part != leading and (part in flat or not _spans_surface(points)):
             reason = "it spans no surface (its points are on a line or a plane)"
             kept[part] = 1
         if kept[part] >= 2 and widths is not None and kept[part] < levels and min(widths) < neighbors:
@@ -252,6 +252,13 @@ def decompose_parts(p: np.ndarray, normals, labels: np.ndarray, count: int, leve
     if parts_out is not None:  # (point indices, Decomposition or None, reason) per part
         parts_out.extend(parts)
     return arrays, stats, reports
+
+
+def leading_points(reports: list[dict]) -> int:
+    """The point count of the leading part, from decompose's part reports (dec.parts): the
+    largest of those that keep the most levels. Level 0's coarseness is its."""
+    most = max(r["levels"] for r in reports)
+    return max(r["points"] for r in reports if r["levels"] == most)
 
 
 def leading_part(p: np.ndarray, labels: np.ndarray, count: int) -> int | None:

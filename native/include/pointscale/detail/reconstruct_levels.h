@@ -29,20 +29,24 @@ EditSupport edit_support(const Points& base, const IndexList& parts, const Point
 // fitting them. Read only once found, so calls on any thread can share it (EditMemo).
 struct KeptEdit {
   std::shared_ptr<const EditSupport> support;
-  std::shared_ptr<const std::vector<Points>> unit_normals;  // or null: fitted by each call
+  std::shared_ptr<const std::vector<Points>> unit_normals;
 };
 
-// The stored base's level normals at unit gains, levels 1..k-1 (row 0 empty): one unedited
-// pass (ReconstructionWorkspace::unit_reference).
+// The unedited pass at unit gains: returns the finest level, and leaves the stored base's
+// level normals at unit gains (levels 1..k-1, row 0 empty) in workspace.unedited_normals.
+struct ReconstructionWorkspace;
+Points unit_pass(const MultiscaleModel& model, const ProgressStage& progress, ReconstructionWorkspace& workspace);
+
+// Those level normals alone (ReconstructionWorkspace::unit_reference).
 std::shared_ptr<const std::vector<Points>> unit_level_normals(const MultiscaleModel& model,
                                                               const ProgressStage& progress);
 
 // Whether gains (k by 1 or k by #P) are all 1.
 bool all_unit(const Eigen::MatrixXd& gains);
 
-// Finds it: a pass over the stored base's levels at unit gains (for the feet, and the
-// normals when with_unit_normals), then the support. Progress as two passes over the levels.
-KeptEdit find_kept_edit(const MultiscaleModel& model, const ProgressStage& progress, bool with_unit_normals);
+// Finds it: a pass over the stored base's levels at unit gains (for the feet and the
+// normals), then the support. Progress as two passes over the levels.
+KeptEdit find_kept_edit(const MultiscaleModel& model, const ProgressStage& progress);
 
 // An editing session's last edited call, so that the next one with the same gains does again
 // only what the base's changes since then reach (reconstruction.cpp). Empty (base.rows() == 0)
