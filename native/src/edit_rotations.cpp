@@ -276,6 +276,7 @@ EditRingPlanes ring_planes(const Points& original, const IndexList& rings, int r
   planes.normals.resize(n);
   planes.kind.resize(n);
   planes.in_plane.resize(n);
+  planes.tolerance = edit_tolerance(original);
   parallel_for(n, [&](std::size_t b, std::size_t e) {
     Ring e0;
     for (std::size_t i = b; i < e; ++i) {
@@ -303,12 +304,12 @@ void edit_rotations(const Points& original, const Points& edited, const IndexLis
   rotation.resize(n);
   if (kinds) kinds->resize(n);
   std::atomic<std::size_t> counts[4] = {{0}, {0}, {0}, {0}};
-  const double tolerance = edit_tolerance(original);
   EditRingPlanes found;
   if (!planes) {
     found = ring_planes(original, rings, ring_size);
     planes = &found;
   }
+  const double tolerance = planes->tolerance;
   parallel_for(n, [&](std::size_t b, std::size_t e) {
     std::size_t local[4] = {0, 0, 0, 0};
     for (std::size_t i = b; i < e; ++i) {
@@ -336,7 +337,7 @@ void edit_rotations_of(const IndexList& which, const Points& original, const Poi
   const std::size_t n = static_cast<std::size_t>(original.rows());
   if (rotation.size() != n || kinds.size() != n || turned_again.size() != n)
     throw std::invalid_argument("edit_rotations_of needs rotation, kinds and turned_again sized #P");
-  const double tolerance = edit_tolerance(original);
+  const double tolerance = planes.tolerance;
   parallel_for(which.size(), [&](std::size_t b, std::size_t e) {
     for (std::size_t t = b; t < e; ++t) {
       const std::size_t i = static_cast<std::size_t>(which[t]);

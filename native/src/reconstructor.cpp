@@ -130,6 +130,7 @@ void Reconstructor::State::find_edit_support(const ProgressStage& progress) {
   to.planes.normals.resize(from.planes.normals.size());
   to.planes.kind.resize(from.planes.kind.size());
   to.planes.in_plane.resize(from.planes.in_plane.size());
+  to.planes.tolerance = from.planes.tolerance;
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
     for (std::size_t r = b; r < e; ++r) {
       const std::size_t i = static_cast<std::size_t>(order[r]);

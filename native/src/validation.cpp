@@ -7,6 +7,9 @@
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <vector>
+
+#include "pointscale/parallel.h"
 
 namespace pointscale {
 
@@ -325,6 +328,37 @@ void check_rows(Eigen::Index rows, Eigen::Index points, const char* name) {
 
 void check_base(const PointsRef& base, Eigen::Index points, const Vec3& centre) {
   check_rows(base.rows(), points, "base");
+  // An editing session checks a base on every call: one pass over it on every thread finds
+  // what the three checks below need, and they run (and say what is wrong) only if it fails.
+  const std::size_t n = static_cast<std::size_t>(base.rows()), chunk = 16384;
+  const std::size_t chunks = (n + chunk - 1) / chunk;
+  std::vector<Vec3> lo(chunks), hi(chunks);
+  std::vector<unsigned char> finite(chunks, 1);
+  parallel_for(n, [&](std::size_t b, std::size_t e) {
+    const std::size_t c = b / chunk;
+    Vec3 l = Vec3::Constant(INFINITY), h = Vec3::Constant(-INFINITY);
+    bool ok = true;
+    for (std::size_t i = b; i < e; ++i)
+      for (int a = 0; a < 3; ++a) {
+        const double v = base(static_cast<Eigen::Index>(i), a);
+        ok = ok && std::isfinite(v);
+        l[a] = std::min(l[a], v);
+        h[a] = std::max(h[a], v);
+      }
+    lo[c] = l;
+    hi[c] = h;
+    finite[c] = ok ? 1 : 0;
+  }, {}, chunk);
+  Vec3 l = Vec3::Constant(INFINITY), h = Vec3::Constant(-INFINITY);
+  bool ok = n > 0;
+  for (std::size_t c = 0; c < chunks; ++c) {
+    ok = ok && finite[c];
+    l = l.cwiseMin(lo[c]);
+    h = h.cwiseMax(hi[c]);
+  }
+  const double largest = std::max(l.cwiseAbs().maxCoeff(), h.cwiseAbs().maxCoeff());
+  const double far = std::max((l - centre).cwiseAbs().maxCoeff(), (h - centre).cwiseAbs().maxCoeff());
+  if (ok && largest <= max_coordinate && far <= max_extent) return;
   check_points(base, "base");
   check_near(base, centre, "base", "the decomposition");
 }

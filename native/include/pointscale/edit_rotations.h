@@ -62,6 +62,9 @@ struct EditRingPlanes {
   std::vector<Vec3> normals;  // #P
   std::vector<unsigned char> kind;  // #P
   std::vector<std::array<Vec3, 2>> in_plane;  // #P
+  // How far a ring's edges may move and the ring still count as unchanged: the rounding of
+  // the base's coordinates (1e-12 of its diagonal), well below any edit an artist makes.
+  double tolerance = 0.0;
 };
 // ring_size at most edit_ring_size (std::invalid_argument otherwise), as for edit_rotations.
 EditRingPlanes ring_planes(const Points& original, const IndexList& rings, int ring_size);
