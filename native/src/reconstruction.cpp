@@ -128,16 +128,52 @@ void turn_towards_feet(const std::vector<HangFromFoot>& hang, Points& p, Reconst
   }, {}, 4096);
 }
 
-// Adds band l to point i along its level normal turned by the edit at its foot; returns that
-// normal.
-inline Eigen::RowVector3d add_turned_band(Eigen::Index i, double offset, const Mat3& turn, const Points& nrm,
-                                          Points& p) {
-  const Eigen::RowVector3d n = (turn * nrm.row(i).transpose()).transpose();
-  p.row(i) += offset * n;
-  return n;
+// Adds level l's band along the stored base's level normals nrm to each point's detail
+// (ReconstructionWorkspace::detail), and to the level `unedited` builds when not null.
+void add_level_detail(const MultiscaleModel& model, const Eigen::MatrixXd& gains, int l, const Points& nrm,
+                      Points& detail, Points* unedited) {
+  const bool per_point = gains.cols() > 1;
+  parallel_for(static_cast<std::size_t>(detail.rows()), [&](std::size_t b, std::size_t e) {
+    for (std::size_t ii = b; ii < e; ++ii) {
+      const Eigen::Index i = static_cast<Eigen::Index>(ii);
+      const double offset = (per_point ? gains(l, i) : gains(l, 0)) * model.details(l, i);
+      detail.row(i) += offset * nrm.row(i);
+      if (unedited) unedited->row(i) += offset * nrm.row(i);
+    }
+  }, {}, 4096);
+}
+
+// Whether a and b are the same gains (k by 1 or k by #P), bit for bit; an empty a never is.
+bool same_gains(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return a.size() > 0 && a.rows() == b.rows() && a.cols() == b.cols() && (a.array() == b.array()).all();
 }
 
 bool same_bits(const Mat3& a, const Mat3& b) { return std::memcmp(a.data(), b.data(), sizeof(Mat3)) == 0; }
+
+// Whether the edit left the ring of a point's foot as it was (its turn is exactly the identity).
+inline bool not_turned(const Mat3& turn) {
+  static const Mat3 identity = Mat3::Identity();
+  return same_bits(turn, identity);
+}
+
+// Point i of an edited pass, before its hang from its foot, from the edited base position it
+// holds: its detail turned by the edit at its foot (every level's normal at a point turns by
+// that same turn, so turning the levels' sum is turning each band, to rounding). Where the
+// edit did not turn it, its bands are added one by one along the levels' normals (normals[l],
+// l < upto), as the unedited pass adds them: a local edit leaves the rest bit for bit as it was.
+inline void edited_point(const MultiscaleModel& model, const Eigen::MatrixXd& gains,
+                         const std::vector<const Points*>& normals, const Points& detail, const Mat3& turn,
+                         Eigen::Index i, Points& p) {
+  if (!not_turned(turn)) {
+    p.row(i) += (turn * detail.row(i).transpose()).transpose();
+    return;
+  }
+  const bool per_point = gains.cols() > 1;
+  for (std::size_t l = 0; l < normals.size(); ++l) {
+    const int level = static_cast<int>(l);
+    p.row(i) += ((per_point ? gains(level, i) : gains(level, 0)) * model.details(level, i)) * normals[l]->row(i);
+  }
+}
 
 // An editing session's edited call with the gains of its last one (whose level normals it
 // reads) and a base that changed at few points since then: only what those changes reach is
@@ -145,22 +181,32 @@ bool same_bits(const Mat3& a, const Mat3& b) { return std::memcmp(a.data(), b.da
 // pass gives. A ring is measured again where one of its points moved or its level-0 cluster
 // turned otherwise; a point is rebuilt where it, its foot, or its foot's turn changed (nothing
 // else enters its bands or its hang). Returns false, having changed nothing, where more than a
-// quarter of the base moved: the whole pass is then as quick.
-// edited: the edited base p held when the call began (p receives results as it goes).
+// quarter of the base moved (or of every 64th point, which is seen first): the whole pass is
+// then as quick.
+// edited: the edited base; the rebuilt points are written over the last result (the others
+// are the last result already), and the workspace's detail is that of these gains.
 bool rebuild_since_last_edit(const MultiscaleModel& model, const Eigen::MatrixXd& gains, const Points& edited,
-                             Points& p, const std::vector<Mat3>& clusters, const std::vector<const Points*>& normals,
+                             const std::vector<Mat3>& clusters, const std::vector<const Points*>& normals,
                              ReconstructionWorkspace& ws, EditRotationReport& report) {
   LastEdit& last = ws.last;
-  const Eigen::Index n = p.rows();
+  Points& p = last.result;
+  const Eigen::Index n = edited.rows();
   const std::size_t count = static_cast<std::size_t>(n);
+  auto moved_since = [&](Eigen::Index r) {
+    const double a[3] = {edited(r, 0), edited(r, 1), edited(r, 2)}, was[3] = {last.base(r, 0), last.base(r, 1), last.base(r, 2)};
+    return std::memcmp(a, was, sizeof a) != 0;
+  };
+  // A base moved everywhere (a deform, a lattice) is told by a sample, before the whole diff.
+  constexpr Eigen::Index sample_step = 64;
+  Eigen::Index sampled = 0, sampled_moved = 0;
+  for (Eigen::Index r = 0; r < n; r += sample_step, ++sampled) sampled_moved += moved_since(r) ? 1 : 0;
+  if (sampled_moved > sampled / 4) return false;
   std::vector<unsigned char> moved(count, 0);
   std::atomic<std::size_t> how_many{0};
   parallel_for(count, [&](std::size_t b, std::size_t e) {
     std::size_t local = 0;
     for (std::size_t i = b; i < e; ++i) {
-      const Eigen::Index r = static_cast<Eigen::Index>(i);
-      const double a[3] = {edited(r, 0), edited(r, 1), edited(r, 2)}, was[3] = {last.base(r, 0), last.base(r, 1), last.base(r, 2)};
-      if (std::memcmp(a, was, sizeof a) != 0) { moved[i] = 1; ++local; }
+      if (moved_since(static_cast<Eigen::Index>(i))) { moved[i] = 1; ++local; }
     }
     how_many += local;
   }, {}, 16384);
@@ -188,21 +234,14 @@ bool rebuild_since_last_edit(const MultiscaleModel& model, const Eigen::MatrixXd
   edit_rotations_of(which, model.base, edited, edit.rings, edit.ring_size, clusters, labels, edit.planes, ws.rotation,
                     last.kinds, turned_again);
   // The points to rebuild.
-  const int k = model.bands();
-  const bool per_point = gains.cols() > 1;
   parallel_for(count, [&](std::size_t b, std::size_t e) {
     for (std::size_t ii = b; ii < e; ++ii) {
       const Eigen::Index i = static_cast<Eigen::Index>(ii);
       const std::size_t f = static_cast<std::size_t>(edit.feet[ii]);
-      if (!moved[ii] && !moved[f] && !turned_again[f]) {
-        p.row(i) = last.result.row(i);
-        continue;
-      }
+      if (!moved[ii] && !moved[f] && !turned_again[f]) continue;
       const Mat3& turn = ws.rotation[f];
-      for (int l = 0; l < k; ++l) {
-        const double g = per_point ? gains(l, i) : gains(l, 0);
-        add_turned_band(i, g * model.details(l, i), turn, *normals[static_cast<std::size_t>(l)], p);
-      }
+      p.row(i) = edited.row(i);
+      edited_point(model, gains, normals, ws.detail, turn, i, p);
       HangFromFoot hang;
       if (foot_shift(i, static_cast<Index>(f), model.base, edited, turn, hang)) turn_towards_foot(hang, p, nullptr);
     }
@@ -254,35 +293,49 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   // An editing session remembers its last edited call (LastEdit), valid again only once this
   // one is done: a call that fails or is cancelled on the way leaves none behind.
   const bool remember = turned && ws.kept && !kept && upto == k;
-  const bool since_last = remember && cached && ws.last.base.rows() == p.rows() &&
-                          ws.last.gains.rows() == gains.rows() && ws.last.gains.cols() == gains.cols() &&
-                          (ws.last.gains.array() == gains.array()).all();
-  Points given;  // the edited base this call was given, to remember
+  // Each point's detail before the edit's turn (ReconstructionWorkspace::detail): summed up
+  // front where every level's normals are at hand, and kept between calls by a Reconstructor
+  // for its gains; else summed as the levels are built. The same sums in the same order
+  // either way, so every path gives the same points.
+  const bool detail_kept = remember && cached && ws.detail.rows() == p.rows() && same_gains(ws.detail_gains, gains);
+  const bool detail_first = turned && cached && !kept && !detail_kept;
+  std::vector<const Points*> levels_normals;  // where they are all at hand: normals[l], l < upto
+  if (turned && cached) {
+    levels_normals.push_back(&model.base_normals);
+    for (int l = 1; l < upto; ++l) levels_normals.push_back(&cached_normals[static_cast<std::size_t>(l)]);
+  }
+  if (turned && !detail_kept) {
+    ws.detail_gains.resize(0, 0);  // valid again only once every level is in
+    ws.detail.setZero(p.rows(), 3);
+  }
+  if (detail_first) {
+    for (int l = 0; l < upto; ++l) add_level_detail(model, gains, l, *levels_normals[static_cast<std::size_t>(l)], ws.detail, nullptr);
+    if (remember) ws.detail_gains = gains;
+  }
+  const bool since_last = remember && cached && ws.last.valid && ws.last.base.rows() == p.rows() &&
+                          same_gains(ws.last.gains, gains);
   if (remember) {
-    given = p;
     if (since_last) {
-      std::vector<const Points*> normals(static_cast<std::size_t>(k));
-      normals[0] = &model.base_normals;
-      for (int l = 1; l < k; ++l) normals[static_cast<std::size_t>(l)] = &cached_normals[static_cast<std::size_t>(l)];
       const ProgressStage stage = all.sub(0.0, 1.0);
       stage.report(0.0);  // a callback may cancel here too
       bool rebuilt = false;
       try {
-        rebuilt = rebuild_since_last_edit(model, gains, given, p, clusters, normals, ws, report);
+        rebuilt = rebuild_since_last_edit(model, gains, p, clusters, levels_normals, ws, report);
       } catch (...) {
-        ws.last.base.resize(0, 3);  // its turns and kinds may be half updated
+        ws.last.valid = false;  // its result, turns and kinds may be half updated
         throw;
       }
       if (rebuilt) {
-        ws.last.base = std::move(given);
-        ws.last.result = p;
+        ws.last.base = p;  // copied into the storage it has
+        p = ws.last.result;
         ws.last.clusters = std::move(clusters);
         reflect_rows(p, mirrored);
         stage.report(1.0);
         return report;
       }
     }
-    ws.last.base.resize(0, 3);
+    ws.last.valid = false;
+    ws.last.base = p;  // the edited base this call was given, into the storage the last one had
   }
   if (turned) {
     edit_rotations(model.base, p, ws.edit->rings, ws.edit->ring_size, clusters, model.support[0].labels,
@@ -300,6 +353,8 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   }
   if (turned && !cached && !ws.kept) std::vector<Points>().swap(ws.unedited_normals);  // other gains: of no use
   if (kept) kept->levels.push_back(p);
+  // Each edited point's turn at its foot (read once per point below).
+  auto turn_of = [&](std::size_t i) -> const Mat3& { return ws.rotation[static_cast<std::size_t>(ws.edit->feet[i])]; };
   // Level l's normals orient level l + 1's. They are computed into whichever of two buffers
   // the level before does not hold, so each level reuses the storage of the one before it.
   // The stored base's normals are the stored ones, bit for bit (decompose made them with the
@@ -308,6 +363,10 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   for (int l = 0; l < upto; ++l) {
     const LevelSupport& s = model.support[l];
     const ProgressStage stage = all.sub(double(l) / upto, double(l + 1) / upto);
+    if (turned && cached && !kept) {  // the detail is summed already
+      stage.report(1.0);
+      continue;
+    }
     const Points* normals = previous;
     if (l > 0 && cached) {
       normals = &cached_normals[static_cast<std::size_t>(l)];
@@ -327,32 +386,60 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
       normals = &into;
     }
     const Points& nrm = *normals;
-    Points applied;
-    if (kept && turned) applied.resize(p.rows(), 3);
-    parallel_for(static_cast<std::size_t>(p.rows()), [&](std::size_t b, std::size_t e) {
-      for (std::size_t ii = b; ii < e; ++ii) {
-        const Eigen::Index i = static_cast<Eigen::Index>(ii);
-        const double g = per_point ? gains(l, i) : gains(l, 0);
-        const double offset = g * model.details(l, i);
-        if (turned) {
-          const Mat3& turn = ws.rotation[static_cast<std::size_t>(ws.edit->feet[ii])];
-          const Eigen::RowVector3d n = add_turned_band(i, offset, turn, nrm, p);
-          if (!cached) ws.unedited.row(i) += offset * nrm.row(i);
-          if (kept) applied.row(i) = n;
-        } else {
-          p.row(i) += offset * nrm.row(i);
+    if (turned) {
+      // The detail, and the bands of the points the edit did not turn, one by one (edited_point).
+      add_level_detail(model, gains, l, nrm, ws.detail, cached ? nullptr : &ws.unedited);
+      parallel_for(static_cast<std::size_t>(p.rows()), [&](std::size_t b, std::size_t e) {
+        for (std::size_t ii = b; ii < e; ++ii) {
+          if (!not_turned(turn_of(ii))) continue;
+          const Eigen::Index i = static_cast<Eigen::Index>(ii);
+          p.row(i) += ((per_point ? gains(l, i) : gains(l, 0)) * model.details(l, i)) * nrm.row(i);
         }
+      }, {}, 4096);
+      if (kept) {  // this level, and its normals as the edit turns them
+        Points level(p.rows(), 3), applied(p.rows(), 3);
+        parallel_for(static_cast<std::size_t>(p.rows()), [&](std::size_t b, std::size_t e) {
+          for (std::size_t ii = b; ii < e; ++ii) {
+            const Eigen::Index i = static_cast<Eigen::Index>(ii);
+            const Mat3& turn = turn_of(ii);
+            level.row(i) = not_turned(turn) ? Eigen::RowVector3d(p.row(i))
+                                            : Eigen::RowVector3d(p.row(i) + (turn * ws.detail.row(i).transpose()).transpose());
+            applied.row(i) = (turn * nrm.row(i).transpose()).transpose();
+          }
+        }, {}, 4096);
+        kept->levels.push_back(std::move(level));
+        kept->normals.push_back(std::move(applied));
       }
-    }, {}, 4096);
-    if (kept) { kept->levels.push_back(p); kept->normals.push_back(turned ? std::move(applied) : nrm); }
+    } else {
+      parallel_for(static_cast<std::size_t>(p.rows()), [&](std::size_t b, std::size_t e) {
+        for (std::size_t ii = b; ii < e; ++ii) {
+          const Eigen::Index i = static_cast<Eigen::Index>(ii);
+          p.row(i) += ((per_point ? gains(l, i) : gains(l, 0)) * model.details(l, i)) * nrm.row(i);
+        }
+      }, {}, 4096);
+      if (kept) { kept->levels.push_back(p); kept->normals.push_back(nrm); }
+    }
     previous = normals;
     stage.report(1.0);
+  }
+  if (turned && !cached && remember) ws.detail_gains = gains;  // summed as the levels were built
+  if (turned) {
+    // The turned points (their rows still hold their edited base positions); where the levels'
+    // normals were at hand the loop above added no band, and the points not turned take theirs here.
+    const bool bands_added = !(cached && !kept);
+    parallel_for(static_cast<std::size_t>(p.rows()), [&](std::size_t b, std::size_t e) {
+      for (std::size_t ii = b; ii < e; ++ii) {
+        const Mat3& turn = turn_of(ii);
+        if (bands_added && not_turned(turn)) continue;
+        edited_point(model, gains, levels_normals, ws.detail, turn, static_cast<Eigen::Index>(ii), p);
+      }
+    }, {}, 4096);
   }
   if (!hang.empty()) turn_towards_feet(hang, p, kept);
   if (cache && !cached && upto == k) ws.unedited_gains = gains;
   if (remember) {
-    ws.last.base = std::move(given);
     ws.last.result = p;
+    ws.last.valid = true;
     ws.last.gains = gains;
     ws.last.clusters = std::move(clusters);
   }

@@ -1,5 +1,6 @@
 #include "pointscale/reconstructor.h"
 
+#include <atomic>
 #include <numeric>
 
 #include "pointscale/stored_base.h"
@@ -14,6 +15,7 @@ namespace pointscale {
 struct Reconstructor::State {
   MultiscaleModel model;  // reordered: row r (column r of details) is point order[r]
   IndexList order;        // #P
+  IndexList rank;         // #P: point i is row rank[i] (order's inverse)
   IndexList parts;        // the model's part labels in its own numbering, or empty
   ReconstructionWorkspace workspace;
   Points level;           // the level being built, reordered
@@ -68,7 +70,8 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) : state_(std::make_un
     order_.resize(static_cast<std::size_t>(n));
     std::iota(order_.begin(), order_.end(), 0);
   }
-  const IndexList rank = inverse_order(order_);
+  state_->rank = inverse_order(order_);
+  const IndexList& rank = state_->rank;
 
   model_.base.resize(n, 3);
   model_.base_normals.resize(n, 3);
@@ -113,7 +116,6 @@ Reconstructor::Reconstructor(const MultiscaleModel& model) : state_(std::make_un
 
 void Reconstructor::State::find_edit_support(const ProgressStage& progress) {
   const Eigen::Index n = model.base.rows();
-  const IndexList rank = inverse_order(order);
   // The unedited finest level, as reconstruct() finds it: this model's level loop gives it bit
   // for bit, in this order. Its level normals are those of unit gains, kept for the edited calls
   // at those gains (the cache holds one set of gains' normals anyway).
@@ -157,12 +159,19 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
   bool edited = base != nullptr && !is_stored_base(base, s.model.base, origin, s.order.data());
   if (edited) {
     s.level.resize(n, 3);
+    std::atomic<bool> differs{false};
     parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
+      bool here = false;
       for (std::size_t r = b; r < e; ++r)
-        for (int a = 0; a < 3; ++a)
-          s.level(static_cast<Eigen::Index>(r), a) = base[3 * std::size_t(s.order[r]) + a] - origin(a);
+        for (int a = 0; a < 3; ++a) {
+          const Eigen::Index row = static_cast<Eigen::Index>(r);
+          const double v = base[3 * std::size_t(s.order[r]) + a] - origin(a);
+          s.level(row, a) = v;
+          here = here || v != s.model.base(row, a);
+        }
+      if (here) differs.store(true, std::memory_order_relaxed);
     }, {}, 4096);
-    edited = s.level != s.model.base;  // centred onto it by rounding
+    edited = differs.load();  // else centred onto it by rounding
   }
   if (!edited) s.level = s.model.base;
   // The first edited call finds the edit support too, which costs about twice the levels: it
@@ -188,10 +197,13 @@ Points Reconstructor::reconstruct(const Eigen::MatrixXd& gains, const double* ba
     g = &s.gains;
   }
   reconstruct_levels_in_place(s.model, *g, s.level, edited, nullptr, -1, levels, s.workspace);
+  // Written in the caller's order (read in the layout's): a fresh array is then filled page
+  // by page.
   Points out(n, 3);
   const Eigen::RowVector3d shift = origin.transpose();
   parallel_for(static_cast<std::size_t>(n), [&](std::size_t b, std::size_t e) {
-    for (std::size_t r = b; r < e; ++r) out.row(s.order[r]) = s.level.row(static_cast<Eigen::Index>(r)) + shift;
+    for (std::size_t i = b; i < e; ++i)
+      out.row(static_cast<Eigen::Index>(i)) = s.level.row(s.rank[i]) + shift;
   }, {}, 4096);
   return out;
 }

@@ -3,8 +3,10 @@
 // calls). It holds the model in a spatially coherent point
 // order (level 0's clusters one after another), each level's grouping by cluster, the working
 // storage, and, from its first edited call on, what an edited base needs (the rings, planes
-// and feet of edit_rotations.h) and the stored base's level normals for the gains last used.
-// So a call costs the fits and little else. Its results are bit for bit those of
+// and feet of edit_rotations.h), the stored base's level normals for the gains last used and
+// each point's detail summed over them (ReconstructionWorkspace::detail), and its last edited
+// call. So an edited call costs the edit's turns and little else, and one that changed a few
+// points since the last redoes only what they reach. Its results are bit for bit those of
 // reconstruct(). It copies the model (about its size again).
 #pragma once
 #include <memory>

@@ -49,9 +49,10 @@ bool all_unit(const Eigen::MatrixXd& gains);
 KeptEdit find_kept_edit(const MultiscaleModel& model, const ProgressStage& progress);
 
 // An editing session's last edited call, so that the next one with the same gains does again
-// only what the base's changes since then reach (reconstruction.cpp). Empty (base.rows() == 0)
-// until an edited call completes. 49 bytes a point.
+// only what the base's changes since then reach (reconstruction.cpp). Valid only once an
+// edited call completes; its arrays keep their storage from call to call. 49 bytes a point.
 struct LastEdit {
+  bool valid = false;
   Points base;                       // #P by 3, the edited base it was given
   Points result;                     // #P by 3, its finest level
   Eigen::MatrixXd gains;             // its gains
@@ -83,6 +84,13 @@ struct ReconstructionWorkspace {
   // model). Null at unit gains, which need none: the normals are these.
   std::shared_ptr<const std::vector<Points>> unit_reference;
   Points reference;
+  // An edited base: each point's detail before the edit's turn, the sum over the levels of
+  // gain x detail x the stored base's level normal. Every level's normal at a point turns by
+  // the turn at its foot, so the edited finest level is the edited base plus that turn of it
+  // (then hung from the foot). It depends on the gains alone (detail_gains: empty until it is
+  // complete), so an editing session that keeps its gains sums it once: 24 bytes a point.
+  Points detail;
+  Eigen::MatrixXd detail_gains;
   bool kept = false;  // kept between calls: the unedited normals are worth keeping
   LastEdit last;      // kept between calls: the last edited call
 };
