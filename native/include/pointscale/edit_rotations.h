@@ -75,7 +75,8 @@ EditRingPlanes ring_planes(const Points& original, const IndexList& rings, int r
 // cluster_rotation   #C rotations of the level-0 clusters (transported_rotations), with
 // labels             #P each point's level-0 cluster: they tell a ring that turned over from
 //                    one that turned past 90 degrees, and stand in where a ring has no plane
-//                    or turned over
+//                    or turned over (a ring's plane 75-90 degrees from its cluster's turn
+//                    blends the two, so the turn goes over to the cluster's continuously)
 // planes             ring_planes(original, rings, ring_size), or nullptr to find them here
 // Returns #P rotations. A ring the edit did not change, to within 1e-12 of the base's
 // diagonal, gives exactly the identity, so an unedited round trip stays exact.
