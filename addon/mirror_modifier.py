@@ -106,3 +106,39 @@ def mirror_planes(use_axis, use_merge: bool, use_clip: bool, merge_threshold: fl
             origin[b] = -shift[a] / linear[a, b]
             mesh_axes.append(b)
     return MirrorPlanes("".join(AXES[b] for b in sorted(mesh_axes)), tuple(float(v) for v in origin), seam), None
+
+
+def same_planes(then, now: MirrorPlanes | None) -> bool:
+    """Whether the planes a decomposition followed (``then``: anything with axes, origin and
+    seam, such as pointscale.Mirror, or None) are the Mirror modifiers' ``now``: the same axes,
+    at the same places, with seams within 1e-6 of each other (relative)."""
+    if then is None or now is None:
+        return then is None and now is None
+    if "".join(sorted(then.axes)) != now.axes:
+        return False
+    for a in now.axes:
+        i = AXES.index(a)
+        if abs(float(then.origin[i]) - now.origin[i]) > 1e-9 * max(1.0, abs(now.origin[i])):
+            return False
+    return abs(float(then.seam) - now.seam) <= 1e-6 * max(float(then.seam), now.seam)
+
+
+def changed_message(then, now: MirrorPlanes | None, problem: str | None = None) -> str | None:
+    """What Rebuild Detail and Bake Filter say where the Mirror modifiers no longer mirror as
+    they did at Decompose (then: the decomposition's planes, or None; now: the modifiers'
+    planes, or None with ``problem`` when their settings cannot be followed), or None where
+    they do. Decompose reads them once: a modifier added, removed or moved after it mirrors a
+    decomposition made for other planes, and the seam may tear."""
+    if problem is None and same_planes(then, now):
+        return None
+    again = "Decompose again to follow the Mirror modifiers as they are now"
+    if problem is not None:
+        return f"the Mirror modifiers changed since Decompose, and {problem}"
+    if then is None:
+        return (f"{now.describe()} mirror the mesh now, but Decompose did not follow a Mirror modifier, so the "
+                f"detail at the seam is not matched with its reflection and the seam may tear. {again}")
+    then_text = MirrorPlanes("".join(sorted(then.axes)), tuple(float(v) for v in then.origin), float(then.seam)).describe()
+    if now is None:
+        return (f"Decompose followed {then_text}, but no Mirror modifier mirrors the mesh now (or Use Mirror "
+                f"Modifier is off). {again}, or turn the modifier back on")
+    return f"Decompose followed {then_text}, but now {now.describe()} mirror the mesh. {again}"

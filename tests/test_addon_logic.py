@@ -176,3 +176,22 @@ def test_a_decompose_with_more_levels_puts_its_new_keys_beside_their_kin(logic):
     assert logic.moves_up(fresh, logic.keys_in_layout_order(fresh, layout, set(layout))) == []
     same = ["Basis"] + layout + ["Smile"]
     assert logic.moves_up(same, logic.keys_in_layout_order(same, layout, set())) == []
+
+
+def test_mirror_planes_changed_since_decompose_are_told_apart():
+    """Rebuild Detail and Bake Filter say when the Mirror modifiers no longer mirror as at
+    Decompose: added, removed, moved or made unusable; nothing when they are as they were."""
+    mm = addon_module("mirror_modifier")
+    x0 = mm.MirrorPlanes("x", (0.0, 0.0, 0.0), 5e-4)
+    assert mm.changed_message(None, None) is None
+    assert mm.changed_message(ps.Mirror("x", (0.0, 0.0, 0.0), 5e-4), x0) is None
+    assert mm.changed_message(ps.Mirror("x", (1e-12, 0.0, 0.0), 5e-4 * (1 + 1e-9)), x0) is None  # rounding
+    added = mm.changed_message(None, x0)
+    assert "did not follow a Mirror modifier" in added and "x = 0" in added
+    removed = mm.changed_message(ps.Mirror("x", (0.0, 0.0, 0.0), 5e-4), None)
+    assert "no Mirror modifier mirrors the mesh now" in removed
+    moved = mm.changed_message(ps.Mirror("x", (0.25, 0.0, 0.0), 5e-4), x0)
+    assert "x = 0.25" in moved and "now the Mirror modifier's planes x = 0" in moved
+    assert mm.changed_message(ps.Mirror("xy", (0.0, 0.0, 0.0), 5e-4), x0) is not None  # another axis
+    assert mm.changed_message(ps.Mirror("x", (0.0, 0.0, 0.0), 1e-3), x0) is not None  # another merge distance
+    assert "cannot" in mm.changed_message(ps.Mirror("x", (0.0, 0.0, 0.0), 5e-4), None, "it cannot be honoured")

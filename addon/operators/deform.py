@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import bpy
 
-from .. import animation, compute, engine, group_weights, keys, mesh_io, storage, writeback
+from .. import animation, compute, engine, group_weights, keys, mesh_io, mirror_modifier, storage, writeback
 from ._common import DecomposedOperator, mode_problem, set_mode
 
 
@@ -93,6 +93,7 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
             return {"CANCELLED"}
         writeback.show_result(obj, keys.EDIT, result)
         warn_if_scale_animated(self, mesh, "Rebuild detail")
+        warn_if_mirror_changed(self, obj, dec, "Rebuild detail")
         report_folds(self, obj, folds, "Rebuilt the detail")
         for message in keys.layout_messages(mesh, "Rebuilt the detail"):
             self.report({"WARNING"}, message)
@@ -150,6 +151,7 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
             keys.add_owned(mesh, keys.FILTER + keys.PREVIOUS)
         writeback.show_result(obj, keys.FILTER, result)
         warn_if_scale_animated(self, mesh, "Bake filter")
+        warn_if_mirror_changed(self, obj, dec, "Bake filter")
         storage.store_baked_gains(mesh, gains, keys.key_fingerprint(mesh, keys.FILTER))
         if self.reset_bands:
             for l in range(k):
@@ -170,6 +172,20 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
                                   f"'{keys.FILTER + keys.PREVIOUS}'")
         self.return_to_mode(obj)
         return {"FINISHED"}
+
+
+def warn_if_mirror_changed(op, obj, dec, what: str) -> None:
+    """Say so where the Mirror modifiers no longer mirror the mesh as at Decompose."""
+    from .decompose import _mirror_planes
+    problem = now = None
+    if obj.data.multiscale.use_mirror_modifier or dec.mirror is not None:
+        try:
+            now = _mirror_planes(obj, mesh_io.read_basis(obj.data))
+        except ValueError as exc:
+            problem = str(exc)
+    message = mirror_modifier.changed_message(dec.mirror, now, problem)
+    if message:
+        op.report({"WARNING"}, f"{what}: {message}")
 
 
 def warn_if_scale_animated(op, mesh, what: str) -> None:

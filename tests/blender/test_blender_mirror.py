@@ -218,3 +218,32 @@ def test_a_whole_mesh_under_a_mirror_modifier_is_refused_in_blender_words():
     obj = h.mesh_object(v, f, name="Whole")
     obj.modifiers.new("Mirror", "MIRROR")
     h.assert_refused(obj, "decompose", "Merge distance to at least")
+
+
+def test_a_mirror_modifier_changed_after_decompose_is_told(capfd):
+    """Decompose reads the Mirror modifiers once. One added, moved or removed after it mirrors a
+    decomposition made for other planes (the seam may tear): Rebuild Detail and Bake Filter say
+    so, and say nothing while the modifiers are as they were."""
+    points, faces, seam = bumpy_half_sphere()
+    obj = h.mesh_object(points, faces, name="Half")
+    h.decompose(obj, levels=4)
+    capfd.readouterr()
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    assert "Mirror modifier" not in capfd.readouterr().out
+    modifier = obj.modifiers.new("Mirror", "MIRROR")
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    out = capfd.readouterr().out
+    assert "did not follow a Mirror modifier" in out and "Decompose again" in out, out
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    assert "did not follow a Mirror modifier" in capfd.readouterr().out
+
+    h.decompose(obj, levels=4)  # now it follows the modifier
+    capfd.readouterr()
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    assert "Mirror modifier" not in capfd.readouterr().out
+    modifier.use_axis = (False, True, False)  # mirrors along Y instead
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    assert "now the Mirror modifier's planes y = 0" in capfd.readouterr().out
+    obj.modifiers.remove(modifier)
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    assert "no Mirror modifier mirrors the mesh now" in capfd.readouterr().out
