@@ -178,7 +178,8 @@ def warn_if_mirror_changed(op, obj, dec, what: str) -> None:
     """Say so where the Mirror modifiers no longer mirror the mesh as at Decompose."""
     from .decompose import _mirror_planes
     problem = now = None
-    if obj.data.multiscale.use_mirror_modifier or dec.mirror is not None:
+    # The Basis is read only where a modifier is on (its size sets a seam without merge or clip).
+    if obj.data.multiscale.use_mirror_modifier and mirror_modifier.mirror_modifiers(obj.modifiers):
         try:
             now = _mirror_planes(obj, mesh_io.read_basis(obj.data))
         except ValueError as exc:
