@@ -30,6 +30,9 @@ WRITTEN_BASE = "pointscale_base"  # mesh ID property: fingerprint of 'Level 0' a
 # another is said to be unused, and kept as "<name> (previous)" when a Decompose or Clear
 # would drop it. A checksum, not a hash: Rebuild Detail checks every such key on each call.
 WRITTEN_LAYOUT = "pointscale_layout_checksums"
+# Mesh ID property: {result key name: fingerprint of its positions as Rebuild Detail or Bake
+# Filter last wrote them}, so that an artist's sculpt of a result is kept, not written over.
+WRITTEN_RESULTS = "pointscale_results"
 OWNED = "pointscale_keys"  # mesh ID property: the key names this add-on created
 GROUPS = "pointscale_groups"  # mesh ID property: the vertex groups this add-on created
 BAND_MIN = -1.0  # gain 0
@@ -435,6 +438,34 @@ def key_fingerprint(mesh, name: str) -> str | None:
     return None if kb is None else _fingerprint(mesh_io.read_key(kb))
 
 
+_LAST_SHOWN = "(last shown)"  # in WRITTEN_RESULTS: the result key written and shown last
+
+
+def record_written_result(mesh, name: str, co) -> None:
+    """Keeps the fingerprint of the result key ``name`` as just written with positions ``co``,
+    and that it is the one shown last."""
+    written = dict(mesh[WRITTEN_RESULTS]) if WRITTEN_RESULTS in mesh.keys() else {}
+    written[name] = _fingerprint(co)
+    written[_LAST_SHOWN] = name
+    mesh[WRITTEN_RESULTS] = written
+
+
+def last_written_result(mesh) -> str | None:
+    """The result key Rebuild Detail or Bake Filter wrote and showed last, or None."""
+    return mesh[WRITTEN_RESULTS].get(_LAST_SHOWN) if WRITTEN_RESULTS in mesh.keys() else None
+
+
+def result_edited(mesh, name: str, mine: set) -> bool:
+    """Whether the add-on's result key ``name`` changed since the add-on wrote it (an artist
+    sculpted or tweaked it). One written before fingerprints were kept counts as changed:
+    better an unneeded copy than a lost edit."""
+    kb = get(mesh, name)
+    if kb is None or name not in mine:
+        return False
+    written = mesh[WRITTEN_RESULTS] if WRITTEN_RESULTS in mesh.keys() else {}
+    return name not in written or _fingerprint(mesh_io.read_key(kb)) != written[name]
+
+
 def edited_base(mesh, mine: set, written=None) -> np.ndarray | None:
     """The 'Level 0' key's positions when the artist edited them since the Decompose wrote it,
     else None. Decompositions made before the fingerprint was kept count as edited when the key
@@ -515,7 +546,7 @@ def remove_layout(obj, k: int) -> tuple:
         mesh[OWNED] = kept
     elif OWNED in mesh.keys():
         del mesh[OWNED]
-    for prop in (WRITTEN_BASE, WRITTEN_LAYOUT):
+    for prop in (WRITTEN_BASE, WRITTEN_LAYOUT, WRITTEN_RESULTS):
         if prop in mesh.keys():
             del mesh[prop]
     _restore_active(obj, active)

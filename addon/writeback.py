@@ -150,7 +150,7 @@ def clear(obj) -> list:
 SHOWN_COLORS = "pointscale_colors"  # mesh ID property: the colour attributes before Show Details
 # Every mesh ID property the add-on sets, by its exact name (a copy of the mesh drops them).
 ID_PROPERTIES = (storage.PROP, keys.OWNED, keys.GROUPS, keys.CREATED_BASIS, keys.FOLDS_MARKED, keys.WRITTEN_BASE,
-                 keys.WRITTEN_LAYOUT,
+                 keys.WRITTEN_LAYOUT, keys.WRITTEN_RESULTS,
                  SHOWN_COLORS)
 
 
@@ -261,6 +261,7 @@ def show_result(obj, name: str, co: np.ndarray) -> None:
     mesh = obj.data
     kb = keys.ensure_key(obj, name, co)
     keys.add_owned(mesh, name)
+    keys.record_written_result(mesh, name, co)
     kb.value = 1.0
     for other in keys.RESULTS:  # the kept "(previous)" results too: this one is shown alone
         if other != name:

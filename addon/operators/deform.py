@@ -87,13 +87,33 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
             residual = compute.finest_residual(solver, dec, lambda: mesh_io.read_basis(mesh))
             result, folds = compute.rebuild(solver, dec, base, prevent_folds=mesh.multiscale.prevent_folds,
                                             residual=residual)
+            k = mesh.multiscale.n_bands
+            # An artist's sculpt of the last result is kept, as Decompose and Bake Filter keep theirs.
+            mine = keys.owned(mesh, k)
+            kept = keys.result_edited(mesh, keys.EDIT, mine) and keys.keep_as_previous(obj, keys.EDIT, mine)
         except ValueError as exc:
             self.report({"ERROR"}, f"Rebuild detail: {exc}")
             self.return_to_mode(obj)
             return {"CANCELLED"}
+        if kept:
+            keys.add_owned(mesh, keys.EDIT + keys.PREVIOUS)
+        # A bake the artist was looking at last (Edit Base shows Level 0 in between).
+        filter_shown = keys.last_written_result(mesh) == keys.FILTER and keys.get(mesh, keys.FILTER) is not None
         writeback.show_result(obj, keys.EDIT, result)
         warn_if_scale_animated(self, mesh, "Rebuild detail")
         warn_if_mirror_changed(self, obj, dec, "Rebuild detail")
+        if kept:
+            self.report({"INFO"}, f"Rebuild detail: your edits of '{keys.EDIT}' since it was rebuilt are kept, "
+                                  f"switched off, as '{keys.EDIT + keys.PREVIOUS}'")
+        if filter_shown:
+            self.report({"WARNING"}, f"Rebuild detail: '{keys.FILTER}' is switched off: it filters the unedited "
+                                     f"model, and the rebuilt detail is unfiltered. To filter the edit, set the band "
+                                     f"gains and press Bake Filter")
+        values = keys.band_values(mesh, k)
+        if any(v != 0.0 for v in values):
+            self.report({"WARNING"}, f"Rebuild detail: the band gains ({_gains_text(values)}) are not in the rebuilt "
+                                     f"detail: in the viewport they add their bands to it unturned, as on the "
+                                     f"unedited model. Bake Filter applies them along the edit")
         report_folds(self, obj, folds, "Rebuilt the detail")
         for message in keys.layout_messages(mesh, "Rebuilt the detail"):
             self.report({"WARNING"}, message)
@@ -140,9 +160,12 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
             self.report({"ERROR"}, f"Bake filter: {exc}")
             self.return_to_mode(obj)
             return {"CANCELLED"}
-        # A bake the viewport does not show is not built on: keep it rather than write over it.
+        # A bake the viewport does not show, or one edited since (whose gains are unknown), is
+        # not built on: keep it rather than write over it.
+        mine = keys.owned(mesh, k)
+        edited = _shown(mesh, keys.FILTER) and keys.result_edited(mesh, keys.FILTER, mine)
         try:
-            kept = baked is None and keys.keep_as_previous(obj, keys.FILTER, keys.owned(mesh, k))
+            kept = baked is None and keys.keep_as_previous(obj, keys.FILTER, mine)
         except ValueError as exc:  # the artist's own key of the name it would be kept under
             self.report({"ERROR"}, f"Bake filter: {exc}")
             self.return_to_mode(obj)
@@ -167,7 +190,11 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
         report_folds(self, obj, folds, f"Baked gains ({_gains_text(values)}){_on_top_text(baked)} into '{keys.FILTER}'")
         for message in keys.layout_messages(mesh, "Bake filter: baked"):
             self.report({"WARNING"}, message)
-        if kept:
+        if kept and edited:
+            self.report({"INFO"}, f"Bake filter: your edits of '{keys.FILTER}' since it was baked are kept, switched "
+                                  f"off, as '{keys.FILTER + keys.PREVIOUS}'; this bake starts from the decomposition, "
+                                  f"not from the edited key")
+        elif kept:
             self.report({"INFO"}, f"Bake filter: the earlier bake, switched off, is kept as "
                                   f"'{keys.FILTER + keys.PREVIOUS}'")
         self.return_to_mode(obj)
@@ -210,6 +237,12 @@ def _baked_gains_shown(mesh, k: int):
     if baked is None or len(baked) != k:
         return None
     return baked if kb.value == 1.0 else 1.0 + kb.value * (baked - 1.0)
+
+
+def _shown(mesh, name: str) -> bool:
+    """Whether the result key ``name`` is there and shown (on, at a value other than 0)."""
+    kb = keys.get(mesh, name)
+    return kb is not None and not kb.mute and kb.value != 0.0
 
 
 def _gains_text(gains) -> str:

@@ -1,0 +1,82 @@
+"""An eighth artist's pass (trial on Blender 5.2, 2026-12-07): a sculpt of 'Multiscale Edit'
+was written over by the next Rebuild Detail, unsaid; Bake Filter called an edited filter
+"switched off"; Rebuild Detail switched a baked filter off, and left live band gains on top of
+the rebuilt detail, without a word."""
+
+import bpy
+import numpy as np
+import pytest
+
+import blender_helpers as h
+
+pytestmark = pytest.mark.blender
+
+
+def _decomposed():
+    obj = h.mesh_object(h.noisy_sphere(4000), name="Sculpted")
+    h.decompose(obj, levels=4)
+    return obj
+
+
+def _lift_level0(obj, amount=0.05):
+    me = obj.data
+    level0 = h.key(me, "Level 0").astype(np.float64)
+    level0[:, 2] += amount * np.exp(-((level0[:, :2] - [0.0, 0.0]) ** 2).sum(axis=1) / 0.2)
+    assert bpy.ops.pointscale.edit_base(mode="OBJECT") == {"FINISHED"}
+    h.set_key(me, "Level 0", level0)
+
+
+def test_a_sculpted_result_is_kept_by_the_next_rebuild(capfd):
+    obj = _decomposed()
+    me = obj.data
+    _lift_level0(obj)
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}  # unchanged: nothing to keep
+    assert me.shape_keys.key_blocks.get("Multiscale Edit (previous)") is None
+    sculpted = h.key(me, "Multiscale Edit").copy()
+    sculpted[:50] += 0.02  # the artist's tweak of the result
+    h.set_key(me, "Multiscale Edit", sculpted)
+    _lift_level0(obj, 0.03)
+    capfd.readouterr()
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    out = capfd.readouterr().out
+    kept = me.shape_keys.key_blocks.get("Multiscale Edit (previous)")
+    assert kept is not None and kept.value == 0.0, out
+    assert np.array_equal(h.key(me, "Multiscale Edit (previous)"), sculpted)
+    assert "your edits of 'Multiscale Edit'" in out, out
+    assert not np.array_equal(h.key(me, "Multiscale Edit"), sculpted)
+
+
+def test_an_edited_filter_is_said_to_be_edited_not_switched_off(capfd):
+    obj = _decomposed()
+    me = obj.data
+    me.multiscale.bands[2].gain = 2.0
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    tweaked = h.key(me, "Multiscale Filter").copy()
+    tweaked[:50] += 0.02
+    h.set_key(me, "Multiscale Filter", tweaked)
+    me.multiscale.bands[0].gain = 1.5
+    capfd.readouterr()
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    out = capfd.readouterr().out
+    assert "your edits of 'Multiscale Filter' since it was baked are kept" in out, out
+    assert "switched off, is kept" not in out, out
+    assert np.array_equal(h.key(me, "Multiscale Filter (previous)"), tweaked)
+
+
+def test_rebuild_says_what_it_leaves_off(capfd):
+    obj = _decomposed()
+    me = obj.data
+    me.multiscale.bands[2].gain = 0.0
+    assert bpy.ops.pointscale.bake_filter() == {"FINISHED"}
+    _lift_level0(obj)
+    capfd.readouterr()
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    out = capfd.readouterr().out
+    assert "'Multiscale Filter' is switched off" in out, out
+    assert "are not in the rebuilt detail" not in out  # the bake set the sliders back to gain 1
+    me.multiscale.bands[1].gain = 3.0
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    out = capfd.readouterr().out
+    assert "the band gains (1.00, 3.00, 1.00) are not in the rebuilt detail" in out, out
+    assert "is switched off" not in out  # the filter was off already
