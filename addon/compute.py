@@ -70,6 +70,9 @@ def decompose(ps, points: np.ndarray, progress=None, smoother="MLS", encoding="P
     messages = [ps.coarse_base_warning(leading, levels_asked, decimation)]
     if parts:
         messages.append(ps.parts.parts_warning(parts, levels_asked))
+    missed = ps.rays_missed_warning(dec, where=False)
+    if missed:
+        messages.append(f"{missed}. Projection encoding shoots no rays")
     k = dec.n_bands
     levels = np.stack([dec.level(l) for l in range(k)])
     normals = np.stack([dec.normals(l) for l in range(k)])
@@ -147,8 +150,8 @@ _residuals: dict = {}
 def finest_residual(solver, dec, read_basis) -> np.ndarray | None:
     """What the engine's finest level leaves out of the Basis, per vertex, or None when it is
     the Basis itself. Projection (Sec. 7) keeps the input as its finest level; ray shooting
-    (Sec. 6.1) resamples the input's surface there, up to about 1% of the diagonal off the
-    vertices, so Rebuild Detail and Bake Filter add this difference back as part of the finest
+    (Sec. 6.1) resamples the input's surface there, most vertices within about 1% of the
+    diagonal (more where rays missed), so Rebuild Detail and Bake Filter add this difference back as part of the finest
     band (_with_residual), a fixed offset per vertex that does not turn with an edited base:
     unit gains on an unedited base then give the Basis, and other gains what the band keys show.
     read_basis: called for the Basis (n, 3) when the residual is not known yet."""

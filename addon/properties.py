@@ -101,7 +101,7 @@ class MULTISCALE_PG_settings(bpy.types.PropertyGroup):
         items=[
             ("PROJECTION", "Projection", "Top-down: project each point onto the smoother surface (Sec. 6.2)"),
             ("RAY", "Ray Shooting", "Bottom-up: shoot along the smooth normals (Sec. 6.1). Its finest level "
-             "resamples the surface (up to about 1% of the size off the vertices): Rebuild Detail and Bake Filter "
+             "resamples the surface (most vertices within about 1% of the size, more where rays miss it): Rebuild Detail and Bake Filter "
              "add that difference back with the finest band, as a fixed offset per vertex that does not turn with "
              "an edited base"),
         ],

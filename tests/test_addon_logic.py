@@ -195,3 +195,21 @@ def test_mirror_planes_changed_since_decompose_are_told_apart():
     assert mm.changed_message(ps.Mirror("xy", (0.0, 0.0, 0.0), 5e-4), x0) is not None  # another axis
     assert mm.changed_message(ps.Mirror("x", (0.0, 0.0, 0.0), 1e-3), x0) is not None  # another merge distance
     assert "cannot" in mm.changed_message(ps.Mirror("x", (0.0, 0.0, 0.0), 5e-4), None, "it cannot be honoured")
+
+
+def test_decompose_relays_the_rays_that_missed():
+    """Ray shooting's warning of rays that found no surface reached only the console: the add-on
+    decomposes on a worker thread, where warnings are not caught, and passed on only the
+    coarse-base and parts warnings."""
+    compute = addon_module("compute")
+    n = 20000
+    i = np.arange(n) + 0.5
+    phi, theta = np.arccos(1 - 2 * i / n), np.pi * (1 + 5 ** 0.5) * i
+    u = np.c_[np.cos(theta) * np.sin(phi), np.sin(theta) * np.sin(phi), np.cos(phi)]
+    bumps = np.sin(23 * u[:, 0]) * np.sin(19 * u[:, 1]) * np.sin(17 * u[:, 2])
+    noisy = u * (1 + 0.05 * bumps + 0.015 * np.random.default_rng(0).standard_normal(n))[:, None]
+    with pytest.warns(UserWarning, match="rays found no surface"):
+        layout = compute.decompose(ps, noisy, encoding="RAY", levels=4)
+    said = [m for m in layout.warnings if "rays found no surface" in m]
+    assert len(said) == 1 and "settings[" not in said[0] and "Projection encoding" in said[0], layout.warnings
+    assert not any("rays" in m for m in compute.decompose(ps, noisy, levels=4).warnings)

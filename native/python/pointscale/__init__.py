@@ -5,7 +5,7 @@ detail can be filtered band by band, carried along a deformed base, or moved bet
 """
 from ._core import Cancelled
 from .multiscale import (Decomposition, Reconstructor, blend, coarse_base_warning, decompose, decompose_rayshoot,
-                         load, rays_missed_points, reconstruct, reconstruct_levels)
+                         load, rays_missed_points, rays_missed_warning, reconstruct, reconstruct_levels)
 from .surface import decimate, estimate_normals, project
 from .folds import Folds, find_folds
 from .mirror import Mirror
@@ -19,5 +19,5 @@ __all__ = [
     "estimate_normals", "load",
     "io", "project", "reconstruct", "reconstruct_levels", "shapes",
     "Morph", "decompose_rayshoot", "diffusion_levels", "ellipsoid_base", "encode", "morph", "project_sheets",
-    "rays_missed_points", "shoot_rays", "smooth_diffusion",
+    "rays_missed_points", "rays_missed_warning", "shoot_rays", "smooth_diffusion",
 ]

@@ -898,7 +898,7 @@ def decompose_rayshoot(points, levels: int = 4, *, smoother: str = "mls", decima
     return dec
 
 
-def _rays_missed_warning(missed: list) -> str | None:
+def _rays_missed_warning(missed: list, where: bool = True) -> str | None:
     """The warning for rays that found no surface, or None: their points sit off the surface,
     which the counts in settings alone do not tell anyone."""
     total = int(sum(missed))
@@ -906,7 +906,17 @@ def _rays_missed_warning(missed: list) -> str | None:
         return None
     return (f"ray shooting: {total} rays found no surface (per band, coarsest first: "
             f"{', '.join(str(int(m)) for m in missed)}); those points stay at their origin's orthogonal projection, "
-            "so the finer levels may leave the surface there (settings['rays_missed'], rays_missed_points(dec))")
+            "so the finer levels may leave the surface there"
+            + (" (settings['rays_missed'], rays_missed_points(dec))" if where else ""))
+
+
+def rays_missed_warning(dec: Decomposition, where: bool = True) -> str | None:
+    """What decompose_rayshoot warns of when rays found no surface, from a decomposition's
+    settings, or None: for callers that cannot catch warnings (a worker thread). where: end
+    with where the package keeps the counts and the points."""
+    if not isinstance(dec, Decomposition):
+        raise ValueError(f"rays_missed_warning needs a Decomposition, got {type(dec).__name__}")
+    return _rays_missed_warning(dec.settings.get("rays_missed") or [], where)
 
 
 def rays_missed_points(dec: Decomposition) -> list:
