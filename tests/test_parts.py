@@ -467,3 +467,15 @@ def test_coincident_means_within_a_float32_rounding_not_merely_close():
         sv, sf, part = scene(name)
         labels, count = connected_parts(sv, faces=sf)
         assert count == 2 and (labels == part).all()
+
+
+def test_the_parts_warning_calls_the_unnamed_parts_smaller_only_when_they_are():
+    """200 equal scales beside a body were named five at a time "and 195 smaller parts", though
+    they were as large as the ones named (Blender trial)."""
+    def report(points, levels=2):
+        return {"points": points, "levels": levels, "centre": (0.0, 0.0, 0.0), "part": 0, "first_vertex": 0,
+                "why": None}
+    equal = ps.parts.parts_warning([report(10000, 4)] + [report(8) for _ in range(200)], 4)
+    assert "and 195 more parts" in equal and "smaller" not in equal, equal
+    falling = ps.parts.parts_warning([report(10000, 4)] + [report(100 - i) for i in range(20)], 4)
+    assert "and 15 smaller parts" in falling, falling

@@ -429,7 +429,11 @@ def parts_warning(reports: list[dict], levels: int) -> str | None:
     short.sort(key=lambda r: -r["points"])
     named = "; ".join(_described(r) for r in short[:_NAMED_IN_WARNING])
     more = len(short) - _NAMED_IN_WARNING
-    tail = f"; and {more} smaller part{'s' if more > 1 else ''}" if more > 0 else ""
+    if more > 0:  # the rest are no larger than the last named: "smaller" only if none is as large
+        smaller = all(r["points"] < short[_NAMED_IN_WARNING - 1]["points"] for r in short[_NAMED_IN_WARNING:])
+        tail = f"; and {more} {'smaller' if smaller else 'more'} part{'s' if more > 1 else ''}"
+    else:
+        tail = ""
     verb, their, its = ("are", "Their", "their") if len(short) > 1 else ("is", "Its", "its")
     return (f"{len(short)} of {len(reports)} connected parts {verb} too small for levels={levels}: {named}{tail}. "
             f"{their} coarser levels repeat {its} smoothest one, so {its} bands there are zero.")
