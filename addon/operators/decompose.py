@@ -258,8 +258,25 @@ class POINTSCALE_OT_decompose(RunsInBackground, bpy.types.Operator):
         renamed = [(keys.get(obj.data, name), was) for name, was in keys.renamed_layout_keys(obj.data)
                    if name not in layout_names]
         applied = [(kb.name, was, kb.value) for kb, was in renamed if not kb.mute and kb.value != 0.0]
+        # What the earlier bands' sliders and masks were, for the artist: the new bands start at
+        # gain 1, and a mask stays with its band's number, whatever frequencies that band now holds.
+        old_k = obj.data.multiscale.n_bands if storage.has_data(obj.data) else 0
+        old_gains = keys.band_values(obj.data, old_k)
+        old_masks = keys.band_masks(obj, old_k)
         kept = writeback.apply_layout(obj, layout, basis=points, data=data)
         k = layout.k
+        if any(v != 0.0 for v in old_gains):
+            self.report({"INFO"}, f"Decompose '{obj.name}': the band gains ({', '.join(f'{1 + v:.2f}' for v in old_gains)}) "
+                                  "were the earlier bands'; the new bands start at gain 1 (Bake Filter before "
+                                  "decomposing again keeps a filter's look)")
+        moved = [name for l, name in enumerate(old_masks) if name and l < k
+                 and keys.get(obj.data, keys.band_name(l)) is not None
+                 and keys.get(obj.data, keys.band_name(l)).vertex_group == name]
+        if moved and k != old_k:
+            self.report({"WARNING"}, f"Decompose '{obj.name}': {', '.join(repr(n) for n in moved)} "
+                                     f"{'masks' if len(moved) == 1 else 'mask'} the band of the same number among "
+                                     f"{k} bands, painted for one among {old_k}: the frequencies it covers changed "
+                                     "(Band 0 is the coarsest). Repaint it, or pick another group for the band key")
         for name, was, value in applied:
             self.report({"WARNING"}, f"Decompose '{obj.name}': {name!r} holds the earlier decomposition's {was!r} "
                                      f"(renamed) and still applies, at {value:g}, over the new one: set it to 0 "

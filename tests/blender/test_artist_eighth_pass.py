@@ -80,3 +80,23 @@ def test_rebuild_says_what_it_leaves_off(capfd):
     out = capfd.readouterr().out
     assert "the band gains (1.00, 3.00, 1.00) are not in the rebuilt detail" in out, out
     assert "is switched off" not in out  # the filter was off already
+
+
+def test_decompose_again_says_the_gains_start_over_and_a_mask_covers_another_band(capfd):
+    obj = _decomposed()  # 4 levels: 3 bands
+    me = obj.data
+    me.multiscale.bands[0].gain = 0.5
+    me.multiscale.bands[2].gain = 3.0
+    assert bpy.ops.pointscale.paint_band_mask(band=2, enter_paint=False) == {"FINISHED"}
+    group = obj.vertex_groups["Band 2 mask"]
+    group.add(list(range(100)), 0.5, "REPLACE")
+    capfd.readouterr()
+    h.decompose(obj, levels=4, kernel=2.0)  # the same band count
+    out = capfd.readouterr().out
+    assert "the band gains (0.50, 1.00, 3.00) were the earlier bands'" in out, out
+    assert "masks the band of the same number" not in out, out
+    assert all(b.gain == 1.0 for b in me.multiscale.bands)
+    h.decompose(obj, levels=5)  # 4 bands: Band 2 is not the finest now
+    out = capfd.readouterr().out
+    assert "'Band 2 mask' masks the band of the same number among 4 bands, painted for one among 3" in out, out
+    assert "band gains" not in out  # they were at 1
