@@ -54,6 +54,30 @@ def test_reconstruct_rejects_a_base_of_the_wrong_length(dec):
         ps.reconstruct(dec, base=np.full_like(GOOD, np.nan))
 
 
+def collapsed_bases(dec):
+    """Edited bases that span no surface: one position, a line, and a copy 1e-60 wide."""
+    base = dec.base
+    line = base.copy()
+    line[:, 1:] = 0.0
+    tiny = base.mean(axis=0) + 1e-60 * (base - base.mean(axis=0))
+    return [("identical", np.repeat(base[:1], len(base), axis=0)), ("collinear", line), ("identical", tiny)]
+
+
+@pytest.mark.parametrize("case", [0, 1, 2])
+def test_an_edited_base_that_spans_no_surface_is_refused(dec, case):
+    """A base collapsed to a point or a line has no normals to turn the detail by: it was taken
+    without a word, and folds="report" called the point-sized one clean (API trial). A
+    flattened base is an edit like any other."""
+    match, base = collapsed_bases(dec)[case]
+    for call in (lambda: ps.reconstruct(dec, base=base), lambda: ps.Reconstructor(dec).reconstruct(base=base),
+                 lambda: ps.reconstruct(dec, base=base, folds="report")):
+        with pytest.raises(ValueError, match=f"the base's points are {match}|all the base's points are {match}"):
+            call()
+    flat = dec.base.copy()
+    flat[:, 2] = 0.0
+    assert np.isfinite(ps.reconstruct(dec, base=flat)).all()
+
+
 def test_reconstructor_rejects_what_reconstruct_rejects(dec):
     solver = ps.Reconstructor(dec)
     for gains in ([1, 1, 1], np.ones((2, 5)), [1, np.nan]):

@@ -358,9 +358,43 @@ void check_base(const PointsRef& base, Eigen::Index points, const Vec3& centre) 
   }
   const double largest = std::max(l.cwiseAbs().maxCoeff(), h.cwiseAbs().maxCoeff());
   const double far = std::max((l - centre).cwiseAbs().maxCoeff(), (h - centre).cwiseAbs().maxCoeff());
-  if (ok && largest <= max_coordinate && far <= max_extent) return;
-  check_points(base, "base");
-  check_near(base, centre, "base", "the decomposition");
+  if (!(ok && largest <= max_coordinate && far <= max_extent)) {
+    check_points(base, "base");
+    check_near(base, centre, "base", "the decomposition");
+  }
+  // A base must still span a surface (a plane will do: a flattened base is an edit): one that
+  // collapsed to a point or a line has no normals to turn the detail by, and its folds and
+  // result would be read off rounding. The spread about the box's centre, scaled to it, on
+  // every thread; where it looks degenerate, check_surface decides and says why.
+  const Vec3 mid = 0.5 * (l + h);
+  const double half = 0.5 * (h - l).maxCoeff();
+  int exponent = 0;
+  if (half > 0.0) std::frexp(half, &exponent);
+  std::vector<Mat3> moments(chunks, Mat3::Zero());
+  std::vector<Vec3> sums(chunks, Vec3::Zero());
+  parallel_for(n, [&](std::size_t b, std::size_t e) {
+    Mat3 m = Mat3::Zero();
+    Vec3 sum = Vec3::Zero();
+    for (std::size_t i = b; i < e; ++i) {
+      Vec3 c = base.row(static_cast<Eigen::Index>(i)).transpose() - mid;
+      for (int a = 0; a < 3; ++a) c[a] = std::ldexp(c[a], -exponent);
+      sum += c;
+      m.noalias() += c * c.transpose();
+    }
+    moments[b / chunk] = m;
+    sums[b / chunk] = sum;
+  }, {}, chunk);
+  Mat3 m = Mat3::Zero();
+  Vec3 sum = Vec3::Zero();
+  for (std::size_t c = 0; c < chunks; ++c) {
+    m += moments[c];
+    sum += sums[c];
+  }
+  const Vec3 mean = sum / static_cast<double>(n);
+  const Mat3 covariance = m / static_cast<double>(n) - mean * mean.transpose();
+  const Vec3 ev = Eigen::SelfAdjointEigenSolver<Mat3>(covariance, Eigen::EigenvaluesOnly).eigenvalues();
+  const double widest = std::sqrt(std::max(ev[2], 0.0)), middle = std::sqrt(std::max(ev[1], 0.0));
+  if (half < min_extent || !(middle > 1e-5 * widest)) check_surface(base, "the base's points", true);
 }
 
 void check_folds_input(const MultiscaleModel& model, const FoldReference& ref, const Points* edited,

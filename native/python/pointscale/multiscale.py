@@ -747,7 +747,8 @@ def reconstruct(dec: Decomposition, gains=None, base=None, *, progress=None, fol
     """The finest level rebuilt from P^0 with each band scaled by its gain (Eq. 9-11).
 
     gains  (k,) per band or (k, n) per point (painted gains); None means all 1
-    base   an edited P^0 (n, 3): the detail is carried along its new normals (Sec. 8.1)
+    base   an edited P^0 (n, 3): the detail is carried along its new normals (Sec. 8.1); it
+           must still span a surface (a plane will do; a point or a line is refused)
     folds  "ignore": the points (n, 3); "report": (points, Folds), the points unchanged and
            which of them fold over the base; "prevent": (points, Folds) with the gain limited,
            point by point and smoothly, where the surface would fold (pointscale.folds)
