@@ -54,6 +54,23 @@ inline bool reversed(const Vec3& a, const Vec3& b) {
   return d < 0.0 && d * d > fold_rounding * fold_rounding * a.squaredNorm() * b.squaredNorm();
 }
 
+// A ring's plane m0 x m1 is there only where it stands clear of rounding: its sine above
+// plane_rounding. Where the ring lies on a line (three points along a CAD model's edge, the rest
+// of the ring on the other side of a thin wall), the cross product is rounding's, of any
+// direction: a rigid move of the whole model turned it over, and Prevent Folds then moved
+// hundreds of points by 7% of the model.
+constexpr double plane_rounding = 1e-6;
+inline bool has_plane(const Vec3& m0, const Vec3& m1, const Vec3& normal) {
+  return normal.squaredNorm() > plane_rounding * plane_rounding * m0.squaredNorm() * m1.squaredNorm();
+}
+
+// The plane test: the result's plane (m0 x m1) turned against the base's, nb (the stored
+// base's rings with no plane are left out of the test: ring_on_a_line).
+inline bool turned_over(const Vec3& m0, const Vec3& m1, const Vec3& nb) {
+  const Vec3 nr = m0.cross(m1);
+  return has_plane(m0, m1, nr) && reversed(nr, nb);
+}
+
 // Two tangents of the unit normal n with t1 x t2 = n, without a branch on its direction
 // (Duff et al. 2017, "Building an orthonormal basis, revisited").
 inline void tangents(const Vec3& n, Vec3& t1, Vec3& t2) {
@@ -164,9 +181,8 @@ inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std:
     mr0 += u0 * dr;
     mr1 += u1 * dr;
   });
-  const Vec3 nr = mr0.cross(mr1);
   const Vec3 nb = edited ? ring_plane(ref, skip, *edited, s) : Vec3(ref.base_planes.row(s).transpose());
-  if (reversed(nr, nb) && !((exempt | skip) & 1u)) kind |= fold_turned;
+  if (turned_over(mr0, mr1, nb) && !((exempt | skip) & 1u)) kind |= fold_turned;
   return kind;
 }
 
@@ -204,7 +220,7 @@ double unfolding_share(const FoldReference& ref, std::uint16_t skip, std::uint16
     mb1 += u1 * db;
   });
   const Vec3 nb = mb0.cross(mb1);
-  if (!((exempt | skip) & 1u) && reversed(mr0.cross(mr1), nb)) {
+  if (!((exempt | skip) & 1u) && turned_over(mr0, mr1, nb)) {
     const Vec3 d0 = mr0 - mb0, d1 = mr1 - mb1;
     share = std::min(share, first_root(nb.dot(nb), (d0.cross(mb1) + mb0.cross(d1)).dot(nb), d0.cross(d1).dot(nb)));
   }

@@ -69,7 +69,9 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input, 
 // rounding turns either way.
 // A ring that spreads along one line only (a strip of duplicated or collinear scan points, its
 // tangent spread across the line under 1e-3 of that along it) has no plane: it takes only the
-// crossing test.
+// crossing test. Nor does a ring whose plane in the result has a sine under 1e-6 (M_r0 and
+// M_r1 nearly parallel: the points of a CAD edge's ring left on one side of a thin wall), whose
+// cross product is rounding's, of any direction.
 // Both are sign tests, a reversal counting once its cosine is below -1e-9 (a result and its
 // reference built in different coordinates differ by rounding, and an edge at right angles
 // must not flip between them). Where the result is the base itself each edge gives
