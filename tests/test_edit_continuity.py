@@ -85,3 +85,20 @@ def test_a_part_turned_rigidly_moves_a_scan_continuously(degrees):
     axes = np.linalg.svd(dec.base - dec.base.mean(axis=0), full_matrices=False)[2]
     edit = part_turned(dec.base, axes[0], axes[2], degrees, np.zeros(3), 0.15 * diagonal(dec.base))
     assert largest_jump(dec, edit, 0.5) < 1e-9
+
+
+@pytest.mark.parametrize("copies", [25, 200])
+def test_a_rigid_turn_of_a_base_with_coincident_points_is_that_turn(copies):
+    """A point repeated 24 times or more (a scan's repeated returns) filled a neighbour's whole
+    ring: a rigid turn of the base turned that neighbour's detail wrongly, by 8% of the
+    diagonal, and the error jumped as the turn grew (API trial)."""
+    points = ps.shapes.bumpy_sphere(5000)
+    points = np.concatenate([points, np.repeat(points[:1], copies, axis=0)])
+    dec = ps.decompose(points, levels=4)
+    centre = dec.base.mean(axis=0)
+    for degrees in (34.5, 90.0):
+        a = np.radians(degrees)
+        turn = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1.0]])
+        result = ps.reconstruct(dec, base=(dec.base - centre) @ turn.T + centre)
+        error = np.linalg.norm(result - ((points - centre) @ turn.T + centre), axis=1).max()
+        assert error < 1e-12 * diagonal(points), (degrees, error / diagonal(points))

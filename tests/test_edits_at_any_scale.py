@@ -132,9 +132,10 @@ OTHER_PLANES = {  # (size, count, width, height, sample spacing, decimation, ker
 
 # Lifts as high as wide (slopes up to 40 degrees) on the same planes. Measured 2026-12-07 at most
 # 2.45 degrees where the bound is 3 (the small 3 x 3 plane) and 2.58 where it is 6; by principal
-# axes 2.82 where it is 3 and 3.52 where it is 6, except 3.19 on the wide plane with kernel 2
-# where it is 3 (issue 16 stays open on it; 3.36 before points were put on their feet's rays):
-# there a handle on the plane's edge, on the lift's flank, leans 1.4 degrees by its axis.
+# axes 2.98 where it is 3 (the wide plane with kernel 2) and 3.52 where it is 6. The wide plane
+# with kernel 2 gave 3.19 while the rings that measure the turns held coincident points (the
+# handles' bottom rows and the plane's own points: edit_rings keeps one point per position),
+# and 3.36 before points were put on their feet's rays.
 # With feet at the nearest base point in space instead of right below each point (before
 # 2026-12-06) the small plane gave 2.86: a handle's top stood on the crown of the base's bump
 # under it, off to one side. These move with the decomposition's last bits: before every CPU
@@ -169,9 +170,7 @@ def test_tall_handles_on_other_planes_stand_on_the_lifted_base(name, steepness):
             principal = handle_principal_axis_angles(result, handle, centres, normal_at)
             if steepness == 0.5:  # the issue asks 3 / 6; held well within them (measured 1.22 / 1.63)
                 limit = min(bound, 2.0)
-            elif name == "wide plane, 5 x 5, kernel 2" and bound == 3.0:  # not met: 3.19, see above
-                limit = 3.4
-            else:  # measured 2.82 / 3.52
+            else:  # measured 2.98 / 3.52
                 limit = min(bound, 3.75)
             assert principal.max() < limit, (name, centre, radius, lift, principal.round(2))
 

@@ -22,6 +22,52 @@ IndexList base_rings(const Points& base, const IndexList& parts, int size) {
   return parts.empty() ? knn_graph(SpatialIndex(base), width) : knn_within_parts(base, parts, width);
 }
 
+IndexList edit_rings(const Points& base, const IndexList& parts) {
+  IndexList rings = base_rings(base, parts, edit_ring_size);
+  const std::size_t width = static_cast<std::size_t>(ring_size_for(base.rows(), edit_ring_size));
+  const std::size_t n = static_cast<std::size_t>(base.rows());
+  auto same = [&](Index a, Index b) { return (base.row(a).array() == base.row(b).array()).all(); };
+  // Coincident points are as near as each other: they come one after another in a ring.
+  std::vector<Index> crowded;
+  for (std::size_t t = 0; t < n; ++t) {
+    const Index* ring = rings.data() + t * width;
+    for (std::size_t m = 1; m < width; ++m)
+      if (ring[m] != ring[0] && same(ring[m], ring[m - 1])) {
+        crowded.push_back(static_cast<Index>(t));
+        break;
+      }
+  }
+  if (crowded.empty()) return rings;
+  const SpatialIndex index(base);
+  parallel_for(crowded.size(), [&](std::size_t b, std::size_t e) {
+    std::vector<Index> found;
+    std::vector<double> distances;
+    for (std::size_t c = b; c < e; ++c) {
+      const Index t = crowded[c];
+      Index* ring = rings.data() + static_cast<std::size_t>(t) * width;
+      std::size_t kept = 1;
+      ring[0] = t;
+      for (std::size_t k = 2 * width;; k *= 2) {
+        const int asked = static_cast<int>(std::min(k, n));
+        found.resize(static_cast<std::size_t>(asked));
+        distances.resize(static_cast<std::size_t>(asked));
+        const int got = index.knn(base.row(t).data(), asked, found.data(), distances.data());
+        kept = 1;
+        for (int q = 0; q < got && kept < width; ++q) {
+          const Index j = found[static_cast<std::size_t>(q)];
+          if (!parts.empty() && parts[static_cast<std::size_t>(j)] != parts[static_cast<std::size_t>(t)]) continue;
+          bool fresh = true;
+          for (std::size_t m = 0; m < kept && fresh; ++m) fresh = !same(j, ring[m]);
+          if (fresh) ring[kept++] = j;
+        }
+        if (kept == width || asked == static_cast<int>(n)) break;
+      }
+      for (std::size_t m = kept; m < width; ++m) ring[m] = t;  // fewer places than a ring: the point itself
+    }
+  }, {}, 64);
+  return rings;
+}
+
 namespace {
 
 // Walks the rings downhill from start, step by step to the ring point that lowers cost the most

@@ -454,7 +454,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
 
 EditSupport edit_support(const Points& base, const IndexList& parts, const Points& base_normals, const Points& finest) {
   EditSupport edit;
-  edit.rings = base_rings(base, parts, edit_ring_size);
+  edit.rings = edit_rings(base, parts);
   edit.ring_size = ring_size_for(base.rows(), edit_ring_size);
   edit.planes = ring_planes(base, edit.rings, edit.ring_size);
   edit.feet = base_feet(base, base_normals, finest, edit.rings, edit.ring_size);

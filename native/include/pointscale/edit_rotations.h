@@ -27,6 +27,13 @@ inline int ring_size_for(Eigen::Index points, int size = base_ring_size) {
 }
 IndexList base_rings(const Points& base, const IndexList& parts = {}, int size = base_ring_size);
 
+// The rings that measure an edit's turn: base_rings of edit_ring_size, but with one point per
+// position. Points that coincide (a scan's repeated returns, a vertex welded twice) measure no
+// turn, and a ring filled by them lay on a line or at a point: 24 copies of one point took a
+// neighbour's whole ring, and a rigid turn of the base then turned its detail wrongly (8% of
+// the model). A ring with fewer places than it has room for fills the rest with the point itself.
+IndexList edit_rings(const Points& base, const IndexList& parts = {});
+
 // Where each point's detail stands on the base: the base point nearest to the line through
 // the point itself (its finest level) along its base normal, that is right below it, found by
 // walking the rings downhill, so that the detail turns with the base beneath it, not with the
