@@ -23,48 +23,55 @@ IndexList base_rings(const Points& base, const IndexList& parts, int size) {
 }
 
 IndexList edit_rings(const Points& base, const IndexList& parts) {
-  IndexList rings = base_rings(base, parts, edit_ring_size);
-  const std::size_t width = static_cast<std::size_t>(ring_size_for(base.rows(), edit_ring_size));
   const std::size_t n = static_cast<std::size_t>(base.rows());
-  auto same = [&](Index a, Index b) { return (base.row(a).array() == base.row(b).array()).all(); };
-  // Coincident points are as near as each other: they come one after another in a ring.
-  std::vector<Index> crowded;
-  for (std::size_t t = 0; t < n; ++t) {
-    const Index* ring = rings.data() + t * width;
-    for (std::size_t m = 1; m < width; ++m)
-      if (ring[m] != ring[0] && same(ring[m], ring[m - 1])) {
-        crowded.push_back(static_cast<Index>(t));
-        break;
-      }
+  const std::size_t width = static_cast<std::size_t>(ring_size_for(base.rows(), edit_ring_size));
+  // One point per position (and part): the first of those that coincide stands for them all.
+  std::vector<Index> sorted(n);
+  for (std::size_t i = 0; i < n; ++i) sorted[i] = static_cast<Index>(i);
+  auto part = [&](Index i) { return parts.empty() ? 0 : parts[static_cast<std::size_t>(i)]; };
+  auto before = [&](Index a, Index b) {
+    if (part(a) != part(b)) return part(a) < part(b);
+    for (int c = 0; c < 3; ++c)
+      if (base(a, c) != base(b, c)) return base(a, c) < base(b, c);
+    return a < b;
+  };
+  std::sort(sorted.begin(), sorted.end(), before);
+  std::vector<Index> first(n);  // the first point at each point's position
+  for (std::size_t s = 0; s < n; ++s) {
+    const Index i = sorted[s];
+    const bool same = s > 0 && part(sorted[s - 1]) == part(i) &&
+                      (base.row(sorted[s - 1]).array() == base.row(i).array()).all();
+    first[static_cast<std::size_t>(i)] = same ? first[static_cast<std::size_t>(sorted[s - 1])] : i;
   }
-  if (crowded.empty()) return rings;
-  const SpatialIndex index(base);
-  parallel_for(crowded.size(), [&](std::size_t b, std::size_t e) {
-    std::vector<Index> found;
-    std::vector<double> distances;
-    for (std::size_t c = b; c < e; ++c) {
-      const Index t = crowded[c];
-      Index* ring = rings.data() + static_cast<std::size_t>(t) * width;
-      std::size_t kept = 1;
-      ring[0] = t;
-      for (std::size_t k = 2 * width;; k *= 2) {
-        const int asked = static_cast<int>(std::min(k, n));
-        found.resize(static_cast<std::size_t>(asked));
-        distances.resize(static_cast<std::size_t>(asked));
-        const int got = index.knn(base.row(t).data(), asked, found.data(), distances.data());
-        kept = 1;
-        for (int q = 0; q < got && kept < width; ++q) {
-          const Index j = found[static_cast<std::size_t>(q)];
-          if (!parts.empty() && parts[static_cast<std::size_t>(j)] != parts[static_cast<std::size_t>(t)]) continue;
-          bool fresh = true;
-          for (std::size_t m = 0; m < kept && fresh; ++m) fresh = !same(j, ring[m]);
-          if (fresh) ring[kept++] = j;
-        }
-        if (kept == width || asked == static_cast<int>(n)) break;
-      }
-      for (std::size_t m = kept; m < width; ++m) ring[m] = t;  // fewer places than a ring: the point itself
+  std::vector<Index> kept;  // the points that stand for their positions, in index order
+  for (std::size_t i = 0; i < n; ++i)
+    if (first[i] == static_cast<Index>(i)) kept.push_back(static_cast<Index>(i));
+  if (kept.size() == n) return base_rings(base, parts, edit_ring_size);
+  // Their rings (in index order, so that points at equal distances come as base_rings gives
+  // them), read back for every point: its own position first, then the others'.
+  Points positions(static_cast<Eigen::Index>(kept.size()), 3);
+  IndexList kept_parts(parts.empty() ? 0 : kept.size());
+  std::vector<Index> slot(n, -1);
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    positions.row(static_cast<Eigen::Index>(k)) = base.row(kept[k]);
+    if (!parts.empty()) kept_parts[k] = parts[static_cast<std::size_t>(kept[k])];
+    slot[static_cast<std::size_t>(kept[k])] = static_cast<Index>(k);
+  }
+  const IndexList few = base_rings(positions, kept_parts, edit_ring_size);
+  const std::size_t few_width = static_cast<std::size_t>(ring_size_for(positions.rows(), edit_ring_size));
+  IndexList rings(n * width);
+  parallel_for(n, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      const Index own = slot[static_cast<std::size_t>(first[i])];
+      const Index* row = few.data() + static_cast<std::size_t>(own) * few_width;
+      Index* ring = rings.data() + i * width;
+      ring[0] = static_cast<Index>(i);
+      std::size_t m = 1;
+      for (std::size_t q = 1; q < few_width && m < width; ++q)
+        if (row[q] != own) ring[m++] = kept[static_cast<std::size_t>(row[q])];
+      for (; m < width; ++m) ring[m] = static_cast<Index>(i);  // fewer places than a ring: the point itself
     }
-  }, {}, 64);
+  }, {}, 4096);
   return rings;
 }
 
