@@ -457,13 +457,14 @@ def last_written_result(mesh) -> str | None:
 
 def result_edited(mesh, name: str, mine: set) -> bool:
     """Whether the add-on's result key ``name`` changed since the add-on wrote it (an artist
-    sculpted or tweaked it). One written before fingerprints were kept counts as changed:
-    better an unneeded copy than a lost edit."""
+    sculpted or tweaked it). One written before fingerprints were kept (an older file) is not
+    known to be edited, and counts as not: keeping it would replace the '(previous)' key the
+    file may hold, an earlier sculpt kept for the artist, with a result nobody changed."""
     kb = get(mesh, name)
-    if kb is None or name not in mine:
+    if kb is None or name not in mine or WRITTEN_RESULTS not in mesh.keys():
         return False
-    written = mesh[WRITTEN_RESULTS] if WRITTEN_RESULTS in mesh.keys() else {}
-    return name not in written or _fingerprint(mesh_io.read_key(kb)) != written[name]
+    written = mesh[WRITTEN_RESULTS]
+    return name in written and _fingerprint(mesh_io.read_key(kb)) != written[name]
 
 
 def edited_base(mesh, mine: set, written=None) -> np.ndarray | None:

@@ -90,6 +90,8 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
             k = mesh.multiscale.n_bands
             # An artist's sculpt of the last result is kept, as Decompose and Bake Filter keep theirs.
             mine = keys.owned(mesh, k)
+            replaced = keys.get(mesh, keys.EDIT + keys.PREVIOUS) is not None
+            active = obj.active_shape_key.name if obj.active_shape_key is not None else None
             kept = keys.result_edited(mesh, keys.EDIT, mine) and keys.keep_as_previous(obj, keys.EDIT, mine)
         except ValueError as exc:
             self.report({"ERROR"}, f"Rebuild detail: {exc}")
@@ -100,15 +102,17 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
         # A bake the artist was looking at last (Edit Base shows Level 0 in between).
         filter_shown = keys.last_written_result(mesh) == keys.FILTER and keys.get(mesh, keys.FILTER) is not None
         writeback.show_result(obj, keys.EDIT, result)
+        if kept and active == keys.EDIT:  # the artist goes on with the new result, not the kept one
+            obj.active_shape_key_index = mesh.shape_keys.key_blocks.find(keys.EDIT)
         warn_if_scale_animated(self, mesh, "Rebuild detail")
         warn_if_mirror_changed(self, obj, dec, "Rebuild detail")
         if kept:
             self.report({"INFO"}, f"Rebuild detail: your edits of '{keys.EDIT}' since it was rebuilt are kept, "
-                                  f"switched off, as '{keys.EDIT + keys.PREVIOUS}'")
+                                  f"switched off, as '{keys.EDIT + keys.PREVIOUS}'"
+                                  f"{' (replacing the one kept before)' if replaced else ''}")
         if filter_shown:
-            self.report({"WARNING"}, f"Rebuild detail: '{keys.FILTER}' is switched off: it filters the unedited "
-                                     f"model, and the rebuilt detail is unfiltered. To filter the edit, set the band "
-                                     f"gains and press Bake Filter")
+            self.report({"WARNING"}, f"Rebuild detail: '{keys.FILTER}' is switched off, and the rebuilt detail is "
+                                     f"unfiltered. To filter this edit, set the band gains and press Bake Filter")
         values = keys.band_values(mesh, k)
         if any(v != 0.0 for v in values):
             self.report({"WARNING"}, f"Rebuild detail: the band gains ({_gains_text(values)}) are not in the rebuilt "

@@ -100,3 +100,40 @@ def test_decompose_again_says_the_gains_start_over_and_a_mask_covers_another_ban
     out = capfd.readouterr().out
     assert "'Band 2 mask' masks the band of the same number among 4 bands, painted for one among 3" in out, out
     assert "band gains" not in out  # they were at 1
+
+
+def test_a_second_sculpt_is_said_to_replace_the_first_and_stays_active(capfd):
+    obj = _decomposed()
+    me = obj.data
+    _lift_level0(obj)
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    for round_ in range(2):
+        sculpted = h.key(me, "Multiscale Edit").copy()
+        sculpted[:50] += 0.02
+        h.set_key(me, "Multiscale Edit", sculpted)
+        obj.active_shape_key_index = me.shape_keys.key_blocks.find("Multiscale Edit")
+        capfd.readouterr()
+        assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+        out = capfd.readouterr().out
+        assert ("replacing the one kept before" in out) == (round_ == 1), out
+        assert obj.active_shape_key.name == "Multiscale Edit"  # the new result, not the kept sculpt
+        assert np.array_equal(h.key(me, "Multiscale Edit (previous)"), sculpted)
+
+
+def test_a_file_from_before_result_fingerprints_keeps_its_kept_sculpt(capfd):
+    """A .blend saved before the add-on kept fingerprints of its results has none: its first
+    Rebuild Detail must not call the result edited, nor put it over the '(previous)' key, which
+    may hold an earlier sculpt (a reviewer found both)."""
+    obj = _decomposed()
+    me = obj.data
+    _lift_level0(obj)
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    sculpted = h.key(me, "Multiscale Edit").copy()
+    sculpted[:50] += 0.02
+    h.set_key(me, "Multiscale Edit", sculpted)
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}  # kept as '(previous)'
+    del me["pointscale_results"]  # as an older file has it
+    capfd.readouterr()
+    assert bpy.ops.pointscale.rebuild_detail() == {"FINISHED"}
+    assert "your edits" not in capfd.readouterr().out
+    assert np.array_equal(h.key(me, "Multiscale Edit (previous)"), sculpted)
