@@ -94,6 +94,16 @@ def test_other_functions_reject_bad_input(dec):
         ps.blend(dec, 5)
     with pytest.raises(ValueError, match="level"):
         dec.level(7)
+    # A string or a bool is not a number here, though float() and int() take them (API trial).
+    for t in ("1", True, np.bool_(True)):
+        with pytest.raises(ValueError, match="t must be"):
+            ps.blend(dec, t)
+    for l in (True, np.bool_(False)):
+        with pytest.raises(ValueError, match="level"):
+            dec.normals(l)
+        with pytest.raises(ValueError, match="level"):
+            dec.level(l)
+    assert np.array_equal(ps.blend(dec, np.float32(1.0)), dec.level(1))
     with pytest.raises(ValueError, match="Decomposition"):
         ps.reconstruct(GOOD)
     with pytest.raises(ValueError, match="onto"):

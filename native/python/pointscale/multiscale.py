@@ -426,7 +426,8 @@ def _checked_stats(arrays, bands: int) -> list | None:
 
 
 def _level_index(l, count: int) -> int:
-    if not isinstance(l, (int, np.integer)) or not 0 <= l < count:
+    # A bool is an int to Python, but True is no level number anyone means.
+    if isinstance(l, (bool, np.bool_)) or not isinstance(l, (int, np.integer)) or not 0 <= l < count:
         raise ValueError(f"level must be an integer in [0, {count - 1}], got {l!r}")
     return int(l)
 
@@ -837,6 +838,8 @@ def blend(dec: Decomposition, t: float) -> np.ndarray:
     """The continuous blend of Eq. 20-21: t in [0, k]; whole t gives level(t)."""
     _check_decomposition(dec)
     try:
+        if isinstance(t, (str, bytes, bool, np.bool_)):  # float("1") and float(True) would pass
+            raise TypeError
         t = float(t)
     except (TypeError, ValueError):
         raise ValueError(f"t must be a number in [0, {dec.n_bands}], got {t!r}") from None
