@@ -128,15 +128,19 @@ void turn_towards_feet(const std::vector<HangFromFoot>& hang, Points& p, Reconst
   }, {}, 4096);
 }
 
+// Band l's offset at point i: its gain (per band, k by 1, or per point, k by #P) times its detail.
+inline double band_offset(const MultiscaleModel& model, const Eigen::MatrixXd& gains, int l, Eigen::Index i) {
+  return (gains.cols() > 1 ? gains(l, i) : gains(l, 0)) * model.details(l, i);
+}
+
 // Adds level l's band along the stored base's level normals nrm to each point's detail
 // (ReconstructionWorkspace::detail), and to the level `unedited` builds when not null.
 void add_level_detail(const MultiscaleModel& model, const Eigen::MatrixXd& gains, int l, const Points& nrm,
                       Points& detail, Points* unedited) {
-  const bool per_point = gains.cols() > 1;
   parallel_for(static_cast<std::size_t>(detail.rows()), [&](std::size_t b, std::size_t e) {
     for (std::size_t ii = b; ii < e; ++ii) {
       const Eigen::Index i = static_cast<Eigen::Index>(ii);
-      const double offset = (per_point ? gains(l, i) : gains(l, 0)) * model.details(l, i);
+      const double offset = band_offset(model, gains, l, i);
       detail.row(i) += offset * nrm.row(i);
       if (unedited) unedited->row(i) += offset * nrm.row(i);
     }
@@ -168,11 +172,8 @@ inline void edited_point(const MultiscaleModel& model, const Eigen::MatrixXd& ga
     p.row(i) += (turn * detail.row(i).transpose()).transpose();
     return;
   }
-  const bool per_point = gains.cols() > 1;
-  for (std::size_t l = 0; l < normals.size(); ++l) {
-    const int level = static_cast<int>(l);
-    p.row(i) += ((per_point ? gains(level, i) : gains(level, 0)) * model.details(level, i)) * normals[l]->row(i);
-  }
+  for (std::size_t l = 0; l < normals.size(); ++l)
+    p.row(i) += band_offset(model, gains, static_cast<int>(l), i) * normals[l]->row(i);
 }
 
 // An editing session's edited call with the gains of its last one (whose level normals it
@@ -258,7 +259,6 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
                                                bool keep_normals) {
   const int k = model.bands();
   if (upto < 0 || upto > k) upto = k;
-  const bool per_point = gains.cols() > 1;
   EditRotationReport report;
   // An edited base: each point's turn, and the levels of the stored base built beside the
   // edited ones. Their normals, turned, are the edited levels' normals; with nothing edited
@@ -297,8 +297,9 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   // front where every level's normals are at hand, and kept between calls by a Reconstructor
   // for its gains; else summed as the levels are built. The same sums in the same order
   // either way, so every path gives the same points.
+  const bool summed_first = turned && cached && !kept;  // the level loop then adds no band
   const bool detail_kept = remember && cached && ws.detail.rows() == p.rows() && same_gains(ws.detail_gains, gains);
-  const bool detail_first = turned && cached && !kept && !detail_kept;
+  const bool detail_first = summed_first && !detail_kept;
   std::vector<const Points*> levels_normals;  // where they are all at hand: normals[l], l < upto
   if (turned && cached) {
     levels_normals.push_back(&model.base_normals);
@@ -363,7 +364,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   for (int l = 0; l < upto; ++l) {
     const LevelSupport& s = model.support[l];
     const ProgressStage stage = all.sub(double(l) / upto, double(l + 1) / upto);
-    if (turned && cached && !kept) {  // the detail is summed already
+    if (summed_first) {
       stage.report(1.0);
       continue;
     }
@@ -393,7 +394,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
         for (std::size_t ii = b; ii < e; ++ii) {
           if (!not_turned(turn_of(ii))) continue;
           const Eigen::Index i = static_cast<Eigen::Index>(ii);
-          p.row(i) += ((per_point ? gains(l, i) : gains(l, 0)) * model.details(l, i)) * nrm.row(i);
+          p.row(i) += band_offset(model, gains, l, i) * nrm.row(i);
         }
       }, {}, 4096);
       if (kept) {  // this level, and its normals as the edit turns them
@@ -414,7 +415,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
       parallel_for(static_cast<std::size_t>(p.rows()), [&](std::size_t b, std::size_t e) {
         for (std::size_t ii = b; ii < e; ++ii) {
           const Eigen::Index i = static_cast<Eigen::Index>(ii);
-          p.row(i) += ((per_point ? gains(l, i) : gains(l, 0)) * model.details(l, i)) * nrm.row(i);
+          p.row(i) += band_offset(model, gains, l, i) * nrm.row(i);
         }
       }, {}, 4096);
       if (kept) { kept->levels.push_back(p); kept->normals.push_back(nrm); }
@@ -424,13 +425,12 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
   }
   if (turned && !cached && remember) ws.detail_gains = gains;  // summed as the levels were built
   if (turned) {
-    // The turned points (their rows still hold their edited base positions); where the levels'
-    // normals were at hand the loop above added no band, and the points not turned take theirs here.
-    const bool bands_added = !(cached && !kept);
+    // The turned points (their rows still hold their edited base positions), and, where the
+    // loop above added no band, the points not turned too.
     parallel_for(static_cast<std::size_t>(p.rows()), [&](std::size_t b, std::size_t e) {
       for (std::size_t ii = b; ii < e; ++ii) {
         const Mat3& turn = turn_of(ii);
-        if (bands_added && not_turned(turn)) continue;
+        if (!summed_first && not_turned(turn)) continue;
         edited_point(model, gains, levels_normals, ws.detail, turn, static_cast<Eigen::Index>(ii), p);
       }
     }, {}, 4096);
