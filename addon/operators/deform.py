@@ -89,16 +89,12 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
                                             residual=residual)
             k = mesh.multiscale.n_bands
             # An artist's sculpt of the last result is kept, as Decompose and Bake Filter keep theirs.
-            mine = keys.owned(mesh, k)
-            replaced = keys.get(mesh, keys.EDIT + keys.PREVIOUS) is not None
             active = obj.active_shape_key.name if obj.active_shape_key is not None else None
-            kept = keys.result_edited(mesh, keys.EDIT, mine) and keys.keep_as_previous(obj, keys.EDIT, mine)
+            kept, replaced = _keep_result(obj, keys.EDIT, keys.result_edited(mesh, keys.EDIT, keys.owned(mesh, k)))
         except ValueError as exc:
             self.report({"ERROR"}, f"Rebuild detail: {exc}")
             self.return_to_mode(obj)
             return {"CANCELLED"}
-        if kept:
-            keys.add_owned(mesh, keys.EDIT + keys.PREVIOUS)
         # A bake the artist was looking at last (Edit Base shows Level 0 in between).
         filter_shown = keys.last_written_result(mesh) == keys.FILTER and keys.get(mesh, keys.FILTER) is not None
         writeback.show_result(obj, keys.EDIT, result)
@@ -107,9 +103,7 @@ class POINTSCALE_OT_rebuild_detail(DecomposedOperator, bpy.types.Operator):
         warn_if_scale_animated(self, mesh, "Rebuild detail")
         warn_if_mirror_changed(self, obj, dec, "Rebuild detail")
         if kept:
-            self.report({"INFO"}, f"Rebuild detail: your edits of '{keys.EDIT}' since it was rebuilt are kept, "
-                                  f"switched off, as '{keys.EDIT + keys.PREVIOUS}'"
-                                  f"{' (replacing the one kept before)' if replaced else ''}")
+            self.report({"INFO"}, f"Rebuild detail: {_edits_kept(keys.EDIT, 'rebuilt', replaced)}")
         if filter_shown:
             self.report({"WARNING"}, f"Rebuild detail: '{keys.FILTER}' is switched off, and the rebuilt detail is "
                                      f"unfiltered. To filter this edit, set the band gains and press Bake Filter")
@@ -166,16 +160,13 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
             return {"CANCELLED"}
         # A bake the viewport does not show, or one edited since (whose gains are unknown), is
         # not built on: keep it rather than write over it.
-        mine = keys.owned(mesh, k)
-        edited = _shown(mesh, keys.FILTER) and keys.result_edited(mesh, keys.FILTER, mine)
+        edited = _shown(mesh, keys.FILTER) and keys.result_edited(mesh, keys.FILTER, keys.owned(mesh, k))
         try:
-            kept = baked is None and keys.keep_as_previous(obj, keys.FILTER, mine)
+            kept, replaced = _keep_result(obj, keys.FILTER, baked is None)
         except ValueError as exc:  # the artist's own key of the name it would be kept under
             self.report({"ERROR"}, f"Bake filter: {exc}")
             self.return_to_mode(obj)
             return {"CANCELLED"}
-        if kept:
-            keys.add_owned(mesh, keys.FILTER + keys.PREVIOUS)
         writeback.show_result(obj, keys.FILTER, result)
         warn_if_scale_animated(self, mesh, "Bake filter")
         warn_if_mirror_changed(self, obj, dec, "Bake filter")
@@ -195,14 +186,30 @@ class POINTSCALE_OT_bake_filter(DecomposedOperator, bpy.types.Operator):
         for message in keys.layout_messages(mesh, "Bake filter: baked"):
             self.report({"WARNING"}, message)
         if kept and edited:
-            self.report({"INFO"}, f"Bake filter: your edits of '{keys.FILTER}' since it was baked are kept, switched "
-                                  f"off, as '{keys.FILTER + keys.PREVIOUS}'; this bake starts from the decomposition, "
-                                  f"not from the edited key")
+            self.report({"INFO"}, f"Bake filter: {_edits_kept(keys.FILTER, 'baked', replaced)}; this bake starts "
+                                  f"from the decomposition, not from the edited key")
         elif kept:
             self.report({"INFO"}, f"Bake filter: the earlier bake, switched off, is kept as "
                                   f"'{keys.FILTER + keys.PREVIOUS}'")
         self.return_to_mode(obj)
         return {"FINISHED"}
+
+
+def _keep_result(obj, name: str, keep: bool) -> tuple:
+    """Where ``keep``, renames the add-on's result key ``name`` to '<name> (previous)', switched
+    off and recorded as the add-on's (keys.keep_as_previous: ValueError where the artist has a key
+    of that name). Returns (kept, whether it replaced one kept before)."""
+    mesh = obj.data
+    replaced = keys.get(mesh, name + keys.PREVIOUS) is not None
+    kept = keep and keys.keep_as_previous(obj, name, keys.owned(mesh, mesh.multiscale.n_bands))
+    if kept:
+        keys.add_owned(mesh, name + keys.PREVIOUS)
+    return kept, replaced
+
+
+def _edits_kept(name: str, since: str, replaced: bool) -> str:
+    return (f"your edits of '{name}' since it was {since} are kept, switched off, as '{name + keys.PREVIOUS}'"
+            f"{' (replacing the one kept before)' if replaced else ''}")
 
 
 def warn_if_mirror_changed(op, obj, dec, what: str) -> None:
