@@ -1,9 +1,12 @@
 """Command line: pointscale decompose | reconstruct | info | demo.
 
-Errors print one line and exit with code 2; Ctrl-C exits with 130 and leaves no partial files.
+Errors print one line and exit with code 2; Ctrl-C exits with 130, and SIGTERM or SIGHUP with
+128 plus the signal's number, and none of them leaves partial files.
 """
 from __future__ import annotations
 
+import contextlib
+import signal
 import sys
 import warnings
 
@@ -13,6 +16,41 @@ from .parser import build_parser, join_signed_values
 
 EXIT_ERROR = 2
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, what shells report for Ctrl-C
+
+# What a batch scheduler's time limit, `timeout` or a closed terminal sends: by default they end
+# the process at once, and the temporary files of the output were left behind.
+STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, stopping a command as Ctrl-C does: its temporary files are removed."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated(signum)
+
+
+@contextlib.contextmanager
+def _stop_signals_as_interrupts():
+    """SIGTERM and SIGHUP raise Terminated in the main thread for as long as the block runs
+    (where the process has not set them aside: nohup's SIGHUP stays ignored)."""
+    previous = {}
+    for signum in STOP_SIGNALS:
+        try:
+            if signal.getsignal(signum) is signal.SIG_IGN:
+                continue
+            previous[signum] = signal.signal(signum, _raise_terminated)
+        except (ValueError, OSError):  # not the main thread: the defaults stay
+            pass
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def _one_line(text: str) -> str:
@@ -59,7 +97,11 @@ def main(argv=None) -> int:
            "info": commands.cmd_info, "demo": commands.cmd_demo}[args.command]
     warnings.showwarning = _show_warning
     try:
-        run(args)
+        with _stop_signals_as_interrupts():
+            run(args)
+    except Terminated as stop:
+        print(f"pointscale: stopped by {signal.Signals(stop.signum).name}; no files were written", file=sys.stderr)
+        return 128 + stop.signum
     except KeyboardInterrupt:
         print("pointscale: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED

@@ -231,7 +231,7 @@ def cmd_decompose(args) -> None:
 
 def cmd_reconstruct(args) -> None:
     out = Path(args.output)
-    check_output_file(out, args.force)
+    check_output_file(out, args.force, Path(args.decomposition), args.base)
     stages = {"reading": 1.0, "reconstructing": 2.0, "normals": 0.5, "writing": 1.0}
     with CommandProgress(stages) as progress, StagedOutput() as staged:
         progress.stage("reading")
@@ -245,7 +245,7 @@ def cmd_reconstruct(args) -> None:
                           "without --folds nothing is measured")
         template = source if source is not None else io.Scan(points=dec.base)
         check_format_holds(out.suffix.lower(), template, args.decomposition, points=dec.base, shown=out)
-        base = read_base(args.base, dec.n_points, source, dec.base, args.threads) if args.base else None
+        base = read_base(args.base, dec.n_points, source, dec.base, args.threads, dec) if args.base else None
         try:
             points, reference, folds = reconstruct_with_normals(dec, gains, base, args.threads,
                                                                 progress.stage("reconstructing"), args.folds,

@@ -80,10 +80,22 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
-def check_output_file(out: Path, force: bool) -> None:
+def check_output_file(out: Path, force: bool, decomposition: Path | None = None, base: str | None = None) -> None:
+    """Refuses an -o that cannot be written, or that exists (without --force). With --force or
+    not, it refuses the decomposition's own files and the --base file: overwritten, the folder
+    would no longer match its decomposition (level 0 holding a result), or the edit would be lost."""
     if out.is_dir():
         raise ValueError(f"-o {out} is a folder; reconstruct writes one file")
     writable_extension(out, "-o")
+    own = owned_files(decomposition) if decomposition is not None and decomposition.is_dir() else []
+    if decomposition is not None and decomposition.is_file():
+        own.append(decomposition)
+    inside = decomposition is not None and decomposition.is_dir() and out.absolute().parent.resolve() == decomposition.resolve()
+    if any(_same_file(out, p) for p in own) or (inside and is_level_file(out.name)):
+        raise ValueError(f"-o {out} is one of the decomposition's own files, which the folder would then no longer "
+                         "match; write the result to another file")
+    if base is not None and _same_file(out, Path(base)):
+        raise ValueError(f"-o {out} is the --base file, whose edit would be lost; write the result to another file")
     if out.exists() and not force:
         raise ValueError(f"{out} exists; pass --force to overwrite it")
     parent = out.absolute().parent
@@ -126,16 +138,19 @@ def _few_vertices(scan, points: np.ndarray, count: int = 8):
                    faces=faces, face_attributes=face_attributes, format_info=scan.format_info)
 
 
-def read_base(path: str, n_points: int, source, stored=None, threads: int = 0):
+def read_base(path: str, n_points: int, source, stored=None, threads: int = 0, dec=None):
     """The edited level 0 of `path`, (n, 3), checked against the decomposition: the same vertex
     count and, when both files have faces, the same faces (STL, say, renumbers its vertices on
     reading, which would pair each vertex with another's detail). stored: the decomposition's
-    own level 0, against which a base in another vertex order is told (a warning)."""
+    own level 0, against which a base in another vertex order is told (a warning). dec: the
+    decomposition, whose other levels a base is told from (an error)."""
     base = io.read(path)
     if base.n_points != n_points:
         raise ValueError(f"--base {path} has {base.n_points} points; the decomposition has {n_points} "
                          "(edit level_0 without adding or removing vertices)")
     base = _in_input_order(base, source)
+    if stored is not None and dec is not None:
+        _refuse_other_level(path, base, stored, dec, source)
     if stored is not None:
         base = _unedited_at_full_precision(path, base, source, stored)
     if source is not None and source.n_faces and base.n_faces:
@@ -150,23 +165,72 @@ def read_base(path: str, n_points: int, source, stored=None, threads: int = 0):
     return base.points
 
 
+#: The share of a base's points that lie where another level's do, as the file rounds them,
+#: past which the base is taken for that level: an edit of level 0 leaves its points where level
+#: 0 has them, or moves them off every level.
+OTHER_LEVEL_SHARE = 0.5
+
+
+def _refuse_other_level(path: str, base, stored: np.ndarray, dec, source) -> None:
+    """Refuses a level file other than level 0 given as --base (level_3.ply beside level_0.ply,
+    one tab completion away): its detail would be added twice (a scan's points ended up 1 m off,
+    without a word). Told by where its points lie: on another level's, as the file rounds them."""
+    resolution = file_resolution(base)
+    if within_resolution(base.points, stored, resolution).mean() > OTHER_LEVEL_SHARE:
+        return  # level 0, edited here and there: the common case, told without rebuilding a level
+    finest = dec.n_bands
+    for l in range(1, finest + 1):
+        level = source.points if l == finest and source is not None and np.isfinite(source.points).all() else dec.level(l)
+        if within_resolution(base.points, level, resolution).mean() > OTHER_LEVEL_SHARE:
+            raise ValueError(f"--base {path} holds level {l}{' (the input)' if l == finest else ''}, not level 0: "
+                             f"its detail would be added again. Give the (edited) level_0 file as --base")
+
+
 #: Rounding of a single-precision base, as a share of the model's size, beyond which it is said:
 #: a model near the origin rounds by about 3e-8 of its size; one far from it (georeferenced),
 #: by far more.
 SINGLE_PRECISION_SAID = 1e-6
 
 
+def file_resolution(scan):
+    """The largest rounding, per vertex and coordinate ((n, 3), or None for none), by which a
+    file like `scan`'s stores a point: half a step of a LAS file's scaled integers, half a unit in
+    the last place of single precision (float32 PLY, MeshLab's and CloudCompare's files, and the
+    level files of a float32 input). Levels written in such a file come back rounded by it."""
+    info = scan.format_info
+    if info.get("format") in ("las", "laz") and info.get("scales") is not None:
+        return np.broadcast_to(0.5 * np.abs(np.asarray(info["scales"], dtype=np.float64)), scan.points.shape)
+    if np.dtype(scan.precision) == np.float32:
+        return 0.5 * np.spacing(np.abs(scan.points).astype(np.float32)).astype(np.float64)
+    return None
+
+
+def within_resolution(points: np.ndarray, reference: np.ndarray, resolution) -> np.ndarray:
+    """(n,) whether each point is `reference`'s as the file rounded it: within `resolution` of it
+    in every coordinate (exactly equal where there is none)."""
+    if resolution is None:
+        return np.all(points == reference, axis=1)
+    # A rounding exactly halfway is the file's either way: a hair more than half a step.
+    return np.all(np.abs(points - reference) <= resolution * (1.0 + 1e-9), axis=1)
+
+
 def _unedited_at_full_precision(path: str, base, source, stored: np.ndarray):
-    """A base saved in single precision (what MeshLab and Blender write) of a decomposition in
-    double: its vertices that float32 holds as the stored level 0 rounded are taken as the
-    stored ones (unedited), as the Blender add-on takes them. The edited ones keep float32's
-    rounding, which far from the origin moves them, and their detail, visibly: said."""
-    double = source is None or np.dtype(source.precision) == np.float64
-    if np.dtype(base.precision) != np.float32 or not double:
+    """A base saved in a file that rounds coordinates (LAS's scaled integers; single precision,
+    what MeshLab and Blender write): its vertices that the file holds as the stored level 0
+    rounded are taken as the stored ones (unedited), as the Blender add-on takes them, so an
+    unedited round trip stays exact and a local edit leaves the rest as it was (read back from
+    a LAS file at 1 mm, an unedited level 0 moved a tenth of the points by up to 3.7 mm). The
+    edited ones keep the file's rounding; where that is float32's far from the origin of a
+    decomposition in double, which moves them and their detail visibly, it is said."""
+    resolution = file_resolution(base)
+    if resolution is None:
         return base
-    unedited = np.all(base.points.astype(np.float32) == stored.astype(np.float32), axis=1)
+    unedited = within_resolution(base.points, stored, resolution)
     points = base.points.copy()
     points[unedited] = stored[unedited]
+    double = source is None or np.dtype(source.precision) == np.float64
+    if np.dtype(base.precision) != np.float32 or not double:
+        return base.with_geometry(points, base.normals)
     edited = points[~unedited]
     size = float(np.linalg.norm(np.ptp(stored, axis=0)))
     rounding = float(np.abs(edited).max()) * 2.0 ** -24 if len(edited) else 0.0

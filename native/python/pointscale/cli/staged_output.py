@@ -1,8 +1,8 @@
 """Output files that appear all at once or not at all.
 
 Every file of a command is first written under a temporary name beside its final one; only
-when all of them are complete are they renamed into place. An error, a cancel or Ctrl-C
-removes the temporary files, so a folder never holds half of a result.
+when all of them are complete are they renamed into place. An error, a cancel, Ctrl-C, SIGTERM
+or SIGHUP (cli/__init__.py) removes the temporary files, so a folder never holds half of a result.
 """
 from __future__ import annotations
 
@@ -134,12 +134,14 @@ def _put_back(placed: list[Path], replaced: list[tuple[Path, Path]]) -> None:
 
 @contextlib.contextmanager
 def _sigint_held():
-    """Delays Ctrl-C (SIGINT) until the block is done; only the main thread can do so."""
+    """Delays Ctrl-C (SIGINT), SIGTERM and SIGHUP until the block is done; only the main thread
+    can do so."""
     if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
         yield
         return
-    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    held = {signal.SIGINT} | {getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)}
+    signal.pthread_sigmask(signal.SIG_BLOCK, held)
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, held)
