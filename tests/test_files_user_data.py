@@ -356,3 +356,36 @@ def test_empty_gains_are_refused_and_a_missing_value_is_named(tmp_path, capsys):
         cli.main(["reconstruct", str(tmp_path / "out"), "--gains", "--threads", "1", "-o", str(tmp_path / "r.ply")])
     assert "argument --gains: expected one argument" in capsys.readouterr().err
     assert cli.main(["reconstruct", str(tmp_path / "out"), "--gains", "-1,1", "-o", str(tmp_path / "r.ply")]) == 0
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"kernel": "lots"}, "must be a number"),
+    ({"levels": 9}, "the arrays hold 3 levels"),
+    ({"neighbors": 2.5}, "whole number"),
+    ({"smoother": "\x1b[31mred"}, "control character"),
+    ({"note": {"\x07bell": 1}}, "control character"),
+])
+def test_a_shared_decompositions_settings_are_checked_on_loading(tmp_path, capsys, change, message):
+    """`pointscale info` prints the settings: a shared file's escape sequences reached the
+    terminal, and levels=9 was shown for a model of 3 (scan technician's trial)."""
+    import json
+    dec = ps.decompose(wavy_torus(), levels=3)
+    arrays = dec.to_dict()
+    arrays["settings"] = np.frombuffer(json.dumps({**dec.settings, **change}).encode(), dtype=np.uint8)
+    np.savez(tmp_path / "decomposition.npz", **arrays)
+    with pytest.raises(ValueError, match=message):
+        ps.load(tmp_path / "decomposition.npz")
+    assert cli.main(["info", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "\x1b" not in err and "\x07" not in err
+
+
+def test_a_ragged_xyz_and_an_empty_input_name_are_said_in_the_users_words(tmp_path, capsys):
+    """NumPy's advice ("use `usecols`") named an option the user does not have; an empty input
+    name was called a folder."""
+    (tmp_path / "ragged.xyz").write_text("1 2 3\n4 5\n6 7 8\n")
+    assert cli.main(["decompose", str(tmp_path / "ragged.xyz"), "-o", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "row 2" in err and "usecols" not in err
+    assert cli.main(["decompose", "", "-o", str(tmp_path / "out")]) == 2
+    assert "input file name is empty" in capsys.readouterr().err

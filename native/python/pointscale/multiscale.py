@@ -396,7 +396,42 @@ def _checked_arrays(arrays):
     out["labels"] = np.ascontiguousarray(np.stack(label_rows))
     if "parts" in arrays:  # written for a decomposition of connected parts (pointscale.parts)
         out["parts"] = indices("parts", (n,), n, "parts")
+    _check_settings(settings, k, _bad)
     return out, origin, settings
+
+
+# Settings that decompose records as numbers (whole numbers: the first three).
+_WHOLE_SETTINGS = ("levels", "neighbors", "max_iterations")
+_NUMBER_SETTINGS = ("decimation", "kernel", "tolerance", "max_variation")
+
+
+def _check_settings(settings: dict, bands: int, bad) -> None:
+    """The settings a file gives, which `pointscale info` and the warnings print: numbers where
+    decompose writes numbers, the level count the arrays have, and text without control
+    characters (a shared file's settings printed escape sequences to the terminal)."""
+    for key in _WHOLE_SETTINGS + _NUMBER_SETTINGS:
+        if key not in settings:
+            continue
+        value = settings[key]
+        whole = key in _WHOLE_SETTINGS
+        if isinstance(value, bool) or not isinstance(value, int if whole else (int, float)):
+            raise bad(f"settings['{key}'] must be a {'whole ' if whole else ''}number, got {json.dumps(value)[:40]}")
+    if "levels" in settings and settings["levels"] != bands + 1:
+        raise bad(f"settings['levels'] is {settings['levels']}, but the arrays hold {bands + 1} levels")
+
+    def texts(value):
+        if isinstance(value, str):
+            yield value
+        elif isinstance(value, dict):
+            for key, item in value.items():
+                yield key
+                yield from texts(item)
+        elif isinstance(value, list):
+            for item in value:
+                yield from texts(item)
+    for text in texts(settings):
+        if not text.isprintable():
+            raise bad(f"settings hold text with a control character: {text[:40]!r}")
 
 
 _STATS_KEYS = ("support_points", "kernel_width", "not_converged", "degenerate", "consistency_iterations",

@@ -15,6 +15,8 @@ from .level_files import level_scan
 def writable_extension(path: Path | str, what: str, shown: str | None = None) -> str:
     """path's extension, if a supported one; `what` and `shown` (default: path) name it."""
     extension = Path(path).suffix.lower()
+    if what == "input" and not str(path):
+        raise ValueError("the input file name is empty")
     if what == "input" and Path(path).is_dir():  # the reader would say so, after this check
         raise ValueError(f"input {path} is a folder, not a file")
     if extension not in io.SUPPORTED_EXTENSIONS:

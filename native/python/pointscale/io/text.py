@@ -280,7 +280,9 @@ def _load(path: str, skip_first: bool, leading: list | None = None):
     except ValueError as exc:
         if str(exc).startswith(path):  # open_text's own words
             raise
-        raise ValueError(f"{path}: unreadable row ({_first_line(exc)}){_unreadable_hint(str(exc))}") from None
+        # NumPy's advice names its own options (usecols), not the file's: left out.
+        reason = re.sub(r";\s*use `usecols`.*$", "", _first_line(exc))
+        raise ValueError(f"{path}: unreadable row ({reason}){_unreadable_hint(str(exc))}") from None
     except OSError as exc:
         raise ValueError(f"{path}: cannot read ({exc})") from None
     if rows.size == 0:
