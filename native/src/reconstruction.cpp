@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 
 #include "pointscale/parallel.h"
+#include "pointscale/detail/ease_side_flips.h"
 #include "pointscale/detail/level_normals.h"
 #include "pointscale/detail/mirrored_edit.h"
 #include "pointscale/detail/transported_rotations.h"
@@ -384,6 +385,7 @@ EditRotationReport reconstruct_levels_in_place(const MultiscaleModel& model, con
       if (both) ws.reference = (*orient)[at] + *previous;
       level_normals(fitted, s, both ? ws.reference : *previous, stage, into, groups,
                     ws.kept ? &ws.centroids : nullptr);
+      if (both) ease_side_flips(into, ws.reference);
       normals = &into;
     }
     const Points& nrm = *normals;
