@@ -75,6 +75,17 @@ def test_a_part_turned_rigidly_moves_the_finned_torus_continuously(degrees, lift
     assert largest_jump(dec, edit, 0.5) < 1e-9
 
 
+@pytest.mark.parametrize("degrees", [90.0, 179.0])
+def test_a_part_turned_far_moves_the_finned_torus_continuously(degrees):
+    """Turns far past 90 degrees, where rings that keep their shape keep their own turn however
+    far it is from their cluster's: a first version of that rule slerped between turns half a
+    circle apart, and the 90-degree turn jumped 9% of the diagonal."""
+    points = finned_torus()
+    dec = ps.decompose(points, levels=4)
+    up, x = np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0])
+    assert largest_jump(dec, part_turned(dec.base, up, x, degrees, 0.2 * up, 0.3), 0.0) < 1e-9
+
+
 @pytest.mark.parametrize("degrees", [35.0, -50.0])
 def test_a_part_turned_rigidly_moves_a_scan_continuously(degrees):
     """One end of the bunny turned in its own plane (about its thinnest principal axis),

@@ -248,13 +248,26 @@ RingKind ring_plane(const Ring& e0, int m, Vec3& normal, Vec3& w1, Vec3& w2) {
 // no point's detail jumps where the ring gives up its own (a finned torus's fins jumped 10% of
 // the model, turning 90 degrees, at a base change of 1e-13).
 constexpr double giving_up_turn = 0.26;  // cos(75 degrees)
+// A ring whose map keeps its shape (the images of the plane's axes of one length and at right
+// angles, as a rigid turn or an isometric bend of the base leaves them) has not turned over,
+// however far it turned from its cluster (a level-0 cluster spans far more than a hinge: a part
+// folded 85 degrees or more about one took its cluster's turn, and detail standing on it leaned
+// 30-90 degrees). It keeps its own turn, fully from conformal_trusted on, not at all below
+// conformal_doubted (a shear that swings a ring's plane round squeezes it flat), and only where
+// its turn is less than 150 degrees from its cluster's, giving way to it by 170: two turns half a
+// circle apart have no one way between them, and the way taken would jump.
+constexpr double conformal_doubted = 0.5, conformal_trusted = 0.8;  // smaller over larger singular value
+constexpr double far_apart = 0.0872, farther_apart = 0.2588;  // cos(85 degrees), cos(75 degrees): half the turns
+double smooth_step(double t) {
+  t = std::min(1.0, std::max(0.0, t));
+  return t * t * (3.0 - 2.0 * t);
+}
 bool planar_rotation(const Vec3& c1, const Vec3& c2, const Vec3& a, const Mat3& cluster, Mat3& rotation) {
   Vec3 b = c1.cross(c2);
   const double bn = b.norm(), c1n = c1.norm();
   if (!(bn > 0.0) || !(c1n > 0.0)) return false;
   b /= bn;
   const double agreement = b.dot(cluster * a);
-  if (!(agreement > 0.0)) return false;  // the ring turned over: no rotation describes it
   const Vec3 t1 = a.unitOrthogonal(), t2 = a.cross(t1);
   const Vec3 f1 = c1 / c1n, f2 = b.cross(f1);
   double cs = c1n + c2.dot(f2), sn = -c2.dot(f1);
@@ -264,10 +277,19 @@ bool planar_rotation(const Vec3& c1, const Vec3& c2, const Vec3& a, const Mat3& 
   sn /= r;
   const Vec3 r1 = cs * f1 + sn * f2, r2 = cs * f2 - sn * f1;
   rotation = r1 * t1.transpose() + r2 * t2.transpose() + b * a.transpose();
-  if (agreement < giving_up_turn) {
-    const double t = agreement / giving_up_turn, weight = t * t * (3.0 - 2.0 * t);
-    rotation = Eigen::Quaterniond(cluster).slerp(weight, Eigen::Quaterniond(rotation)).toRotationMatrix();
+  if (agreement >= giving_up_turn) return true;
+  double weight = smooth_step(agreement / giving_up_turn);
+  const double g11 = c1.squaredNorm(), g22 = c2.squaredNorm(), g12 = c1.dot(c2);
+  const double half = 0.5 * (g11 + g22), gap = std::sqrt(0.25 * (g11 - g22) * (g11 - g22) + g12 * g12);
+  const double conformal = std::sqrt(std::max(0.0, half - gap) / (half + gap));
+  const double trust = smooth_step((conformal - conformal_doubted) / (conformal_trusted - conformal_doubted));
+  const Eigen::Quaterniond from(cluster), to(rotation);
+  if (trust > 0.0) {
+    const double near = smooth_step((std::abs(from.dot(to)) - far_apart) / (farther_apart - far_apart));
+    weight = std::max(weight, trust * near);
   }
+  if (!(weight > 0.0)) return false;  // the ring turned over: no rotation describes it
+  if (weight < 1.0) rotation = from.slerp(weight, to).toRotationMatrix();
   return true;
 }
 

@@ -83,7 +83,9 @@ EditRingPlanes ring_planes(const Points& original, const IndexList& rings, int r
 // labels             #P each point's level-0 cluster: they tell a ring that turned over from
 //                    one that turned past 90 degrees, and stand in where a ring has no plane
 //                    or turned over (a ring's plane 75-90 degrees from its cluster's turn
-//                    blends the two, so the turn goes over to the cluster's continuously)
+//                    blends the two, so the turn goes over to the cluster's continuously); a
+//                    ring that kept its shape (a rigid turn, an isometric bend) keeps its own
+//                    turn up to 150 degrees from its cluster's, going over to it by 170
 // planes             ring_planes(original, rings, ring_size), or nullptr to find them here
 // Returns #P rotations. A ring the edit did not change, to within 1e-12 of the base's
 // diagonal, gives exactly the identity, so an unedited round trip stays exact.
