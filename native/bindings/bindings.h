@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 
 #include <algorithm>
+#include <chrono>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -73,11 +74,27 @@ py::array_t<T> to_array(const std::vector<T>& v) {
 
 // Wraps a Python callable as a ProgressCallback. A Python exception raised inside it cancels the
 // work and is re-raised once the GIL is back.
+// Without one (None), a call from the main thread still looks for Ctrl-C every 100 ms: Python
+// runs its signal handlers only when it holds the GIL, so a decompose of a large scan went on
+// to its end, 12 s, before KeyboardInterrupt was raised.
 struct PythonProgress {
   py::object callable;
   pointscale::ProgressCallback callback;
+  std::chrono::steady_clock::time_point last_look{};
   explicit PythonProgress(py::object c) : callable(std::move(c)) {
-    if (callable.is_none()) return;
+    if (callable.is_none()) {
+      const py::object threading = py::module_::import("threading");
+      if (!threading.attr("current_thread")().is(threading.attr("main_thread")())) return;
+      last_look = std::chrono::steady_clock::now();
+      callback = [this](double) -> bool {
+        const auto now = std::chrono::steady_clock::now();
+        if (now - last_look < std::chrono::milliseconds(100)) return true;
+        last_look = now;
+        py::gil_scoped_acquire gil;
+        return PyErr_CheckSignals() == 0;  // an exception (KeyboardInterrupt) stays set: re-raised
+      };
+      return;
+    }
     callback = [this](double fraction) -> bool {
       py::gil_scoped_acquire gil;
       py::object r;
