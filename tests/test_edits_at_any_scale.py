@@ -247,15 +247,21 @@ def hinge_fold(x0, width, degrees):
     return fold
 
 
+@pytest.fixture(scope="module")
+def fig5_handles():
+    """The handles plane at the Fig. 5 settings: (points, handle labels, centres, decomposition)."""
+    points, handle, centres = ps.shapes.handles_plane(size=2.0, count=4, width=0.1, height=0.4, spacing=0.014)
+    return points, handle, centres, ps.decompose(points, levels=6, decimation=0.2, kernel=2.0)
+
+
 @pytest.mark.parametrize("degrees", [85.0, 90.0, 120.0, -90.0, -135.0])
-def test_handles_on_a_part_folded_about_a_hinge_turn_with_it_rigidly(degrees):
+def test_handles_on_a_part_folded_about_a_hinge_turn_with_it_rigidly(fig5_handles, degrees):
     """The handles plane at the Fig. 5 settings (decimation 0.2, 6 levels, kernel 2) folded about
     a hinge 0.3 wide: the handles wholly beyond it are the input turned rigidly. Level 0's
     clusters span the hinge, and a ring turned 85 degrees or more from its cluster's turn took
     that turn: they leaned 30-90 degrees (off by 0.013-0.54, handles 0.4 tall). Measured
     2026-12-07: 1.7e-13 to 6.5e-13."""
-    points, handle, centres = ps.shapes.handles_plane(size=2.0, count=4, width=0.1, height=0.4, spacing=0.014)
-    dec = ps.decompose(points, levels=6, decimation=0.2, kernel=2.0)
+    points, handle, centres, dec = fig5_handles
     fold = hinge_fold(0.35, 0.3, degrees)
     result = ps.reconstruct(dec, base=fold(dec.base))
     beyond = np.isin(handle, np.flatnonzero(centres[:, 0] > 0.7))
