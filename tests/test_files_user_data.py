@@ -389,3 +389,28 @@ def test_a_ragged_xyz_and_an_empty_input_name_are_said_in_the_users_words(tmp_pa
     assert "row 2" in err and "usecols" not in err
     assert cli.main(["decompose", "", "-o", str(tmp_path / "out")]) == 2
     assert "input file name is empty" in capsys.readouterr().err
+
+
+def test_every_kind_of_decomposition_loads_back_with_its_settings_checked(tmp_path):
+    """The settings check refused a decomposition of parts saved with max_iterations=30.0 (its
+    settings keep the caller's own value, which decompose takes as a whole number). Found by a
+    reviewer, with these kinds."""
+    from scipy.spatial import cKDTree
+    a = ps.shapes.bumpy_sphere(6000, seed=1)
+    b = ps.shapes.bumpy_sphere(2500, seed=2) * 0.5 + [4, 0, 0]
+    points = np.vstack([a, b])
+    edges = np.vstack([np.array([(i + off, j + off) for i, row in enumerate(cKDTree(p).query(p, 4)[1]) for j in row[1:]])
+                       for p, off in ((a, 0), (b, len(a)))])
+    kinds = {"mls": lambda: ps.decompose(a, levels=3),
+             "diffusion": lambda: ps.decompose(a, levels=3, smoother="diffusion"),
+             "rayshoot": lambda: ps.decompose(a, levels=3, encoding="rayshoot"),
+             "parts": lambda: ps.decompose(points, levels=3, edges=edges),
+             "parts, max_iterations 30.0": lambda: ps.decompose(points, levels=3, edges=edges, max_iterations=30.0),
+             "mirrored": lambda: ps.decompose(a[a[:, 0] >= 0], levels=3, mirror="x"),
+             "encoded parts, max_iterations 30.0": lambda: ps.encode(points, ps.ellipsoid_base(points), edges=edges,
+                                                                     max_iterations=30.0)}
+    for name, make in kinds.items():
+        dec = make()
+        dec.save(tmp_path / "d.npz")
+        again = ps.load(tmp_path / "d.npz")
+        assert again.settings == dec.settings, name

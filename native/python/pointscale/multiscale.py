@@ -414,7 +414,9 @@ def _check_settings(settings: dict, bands: int, bad) -> None:
             continue
         value = settings[key]
         whole = key in _WHOLE_SETTINGS
-        if isinstance(value, bool) or not isinstance(value, int if whole else (int, float)):
+        # A whole number may come as 30.0: decompose by parts records the caller's own value.
+        number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if not number or (whole and not float(value).is_integer()):
             raise bad(f"settings['{key}'] must be a {'whole ' if whole else ''}number, got {json.dumps(value)[:40]}")
     if "levels" in settings and settings["levels"] != bands + 1:
         raise bad(f"settings['levels'] is {settings['levels']}, but the arrays hold {bands + 1} levels")

@@ -30,20 +30,34 @@ class Terminated(KeyboardInterrupt):
         self.signum = signum
 
 
+def _ignore_stops_from_now_on() -> None:
+    """The first stop is heard; the ones after it (a closed terminal sends SIGHUP twice) must
+    not cut short the removal of the temporary files it starts."""
+    for signum in (signal.SIGINT,) + STOP_SIGNALS:
+        signal.signal(signum, signal.SIG_IGN)
+
+
 def _raise_terminated(signum, frame):
+    _ignore_stops_from_now_on()
     raise Terminated(signum)
+
+
+def _raise_interrupt(signum, frame):
+    _ignore_stops_from_now_on()
+    raise KeyboardInterrupt
 
 
 @contextlib.contextmanager
 def _stop_signals_as_interrupts():
-    """SIGTERM and SIGHUP raise Terminated in the main thread for as long as the block runs
-    (where the process has not set them aside: nohup's SIGHUP stays ignored)."""
+    """SIGTERM and SIGHUP raise Terminated, and Ctrl-C KeyboardInterrupt, in the main thread for
+    as long as the block runs, each only once (where the process has not set them aside:
+    nohup's SIGHUP stays ignored). The handlers before are back once the block has cleaned up."""
     previous = {}
-    for signum in STOP_SIGNALS:
+    for signum in (signal.SIGINT,) + STOP_SIGNALS:
         try:
             if signal.getsignal(signum) is signal.SIG_IGN:
                 continue
-            previous[signum] = signal.signal(signum, _raise_terminated)
+            previous[signum] = signal.signal(signum, _raise_interrupt if signum == signal.SIGINT else _raise_terminated)
         except (ValueError, OSError):  # not the main thread: the defaults stay
             pass
     try:
@@ -51,6 +65,11 @@ def _stop_signals_as_interrupts():
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+
+
+def _what_was_written() -> str:
+    from .staged_output import committed
+    return "its files were written before it stopped" if committed() else "no files were written"
 
 
 def _one_line(text: str) -> str:
@@ -96,14 +115,16 @@ def main(argv=None) -> int:
     run = {"decompose": commands.cmd_decompose, "reconstruct": commands.cmd_reconstruct,
            "info": commands.cmd_info, "demo": commands.cmd_demo}[args.command]
     warnings.showwarning = _show_warning
+    from .staged_output import forget_commits
+    forget_commits()
     try:
         with _stop_signals_as_interrupts():
             run(args)
     except Terminated as stop:
-        print(f"pointscale: stopped by {signal.Signals(stop.signum).name}; no files were written", file=sys.stderr)
+        print(f"pointscale: stopped by {signal.Signals(stop.signum).name}; {_what_was_written()}", file=sys.stderr)
         return 128 + stop.signum
     except KeyboardInterrupt:
-        print("pointscale: interrupted", file=sys.stderr)
+        print(f"pointscale: interrupted; {_what_was_written()}", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Cancelled:
         print("pointscale: cancelled; no files were written", file=sys.stderr)

@@ -89,10 +89,12 @@ def check_output_file(out: Path, force: bool, decomposition: Path | None = None,
     if out.is_dir():
         raise ValueError(f"-o {out} is a folder; reconstruct writes one file")
     writable_extension(out, "-o")
-    own = owned_files(decomposition) if decomposition is not None and decomposition.is_dir() else []
+    # The decomposition's folder, given as the folder or as its decomposition.npz.
+    folder = None if decomposition is None else decomposition if decomposition.is_dir() else decomposition.parent
+    own = owned_files(folder) if folder is not None else []
     if decomposition is not None and decomposition.is_file():
         own.append(decomposition)
-    inside = decomposition is not None and decomposition.is_dir() and out.absolute().parent.resolve() == decomposition.resolve()
+    inside = folder is not None and out.absolute().parent.resolve() == folder.resolve()
     if any(_same_file(out, p) for p in own) or (inside and is_level_file(out.name)):
         raise ValueError(f"-o {out} is one of the decomposition's own files, which the folder would then no longer "
                          "match; write the result to another file")
@@ -177,14 +179,23 @@ def _refuse_other_level(path: str, base, stored: np.ndarray, dec, source) -> Non
     """Refuses a level file other than level 0 given as --base (level_3.ply beside level_0.ply,
     one tab completion away): its detail would be added twice (a scan's points ended up 1 m off,
     without a word). Told by where its points lie: on another level's, as the file rounds them."""
-    resolution = file_resolution(base)
+    resolution = level_file_rounding(base, source)
     if within_resolution(base.points, stored, resolution).mean() > OTHER_LEVEL_SHARE:
         return  # level 0, edited here and there: the common case, told without rebuilding a level
+    from ..multiscale import reconstruct
     finest = dec.n_bands
+    # Level l rebuilt with the bands above it at gain 0, one level at a time: dec.level() would
+    # keep every level and its normals (160 bytes a point) for the rest of the command. Rebuilt
+    # to rounding, so an exact file is compared within 1e-9 of the model's size.
+    floor = 1e-9 * float(np.linalg.norm(np.ptp(stored, axis=0)))
+    tolerance = np.maximum(resolution, floor) if resolution is not None else np.full(base.points.shape, floor)
     for l in range(1, finest + 1):
-        level = source.points if l == finest and source is not None and np.isfinite(source.points).all() else dec.level(l)
-        if within_resolution(base.points, level, resolution).mean() > OTHER_LEVEL_SHARE:
-            raise ValueError(f"--base {path} holds level {l}{' (the input)' if l == finest else ''}, not level 0: "
+        if l == finest and source is not None and np.isfinite(source.points).all():
+            level = source.points
+        else:
+            level = reconstruct(dec, np.r_[np.ones(l), np.zeros(finest - l)])
+        if within_resolution(base.points, level, tolerance).mean() > OTHER_LEVEL_SHARE:
+            raise ValueError(f"--base {path} holds level {l}{' (the finest)' if l == finest else ''}, not level 0: "
                              f"its detail would be added again. Give the (edited) level_0 file as --base")
 
 
@@ -207,6 +218,19 @@ def file_resolution(scan):
     return None
 
 
+def level_file_rounding(base, source):
+    """How far a level file's vertices may lie from the stored level as `base` was read: its own
+    file's rounding, plus, for a LAS input, the rounding of the level file decompose wrote on the
+    input's grid (a level_0.las re-saved with other offsets or a finer scale rounds twice), or
+    None for none."""
+    own = file_resolution(base)
+    info = source.format_info if source is not None else {}
+    if info.get("format") not in ("las", "laz") or info.get("scales") is None:
+        return own
+    written = np.broadcast_to(0.5 * np.abs(np.asarray(info["scales"], dtype=np.float64)), base.points.shape)
+    return written if own is None else own + written
+
+
 def within_resolution(points: np.ndarray, reference: np.ndarray, resolution) -> np.ndarray:
     """(n,) whether each point is `reference`'s as the file rounded it: within `resolution` of it
     in every coordinate (exactly equal where there is none)."""
@@ -224,7 +248,7 @@ def _unedited_at_full_precision(path: str, base, source, stored: np.ndarray):
     a LAS file at 1 mm, an unedited level 0 moved a tenth of the points by up to 3.7 mm). The
     edited ones keep the file's rounding; where that is float32's far from the origin of a
     decomposition in double, which moves them and their detail visibly, it is said."""
-    resolution = file_resolution(base)
+    resolution = level_file_rounding(base, source)
     if resolution is None:
         return base
     unedited = within_resolution(base.points, stored, resolution)

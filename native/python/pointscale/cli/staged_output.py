@@ -40,7 +40,7 @@ class StagedOutput:
 
     def commit(self, remove_after=()) -> None:
         """Renames every temporary file into place, then removes the files in `remove_after`
-        (stale outputs of an earlier run). Ctrl-C waits until this is done, and a rename that
+        (stale outputs of an earlier run). Ctrl-C, SIGTERM and SIGHUP wait until this is done, and a rename that
         fails puts back what the ones before it replaced, so the folder holds either the old
         result or the new one."""
         with _sigint_held():
@@ -72,6 +72,8 @@ class StagedOutput:
                 Path(stale).unlink(missing_ok=True)
             self._pending.clear()
             self._created_dirs.clear()
+            global _committed
+            _committed = True
 
     def discard(self) -> None:
         for tmp, _ in self._pending:
@@ -132,16 +134,51 @@ def _put_back(placed: list[Path], replaced: list[tuple[Path, Path]]) -> None:
         raise errors[0]
 
 
+# Whether a commit of this process has put its files in place: a command stopped after that
+# says so (cli/__init__.py).
+_committed = False
+
+
+def committed() -> bool:
+    return _committed
+
+
+def forget_commits() -> None:
+    """A new command starts (the command line's main may run several in one process)."""
+    global _committed
+    _committed = False
+
+
+def _held_signals() -> tuple:
+    return (signal.SIGINT,) + tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
 @contextlib.contextmanager
 def _sigint_held():
-    """Delays Ctrl-C (SIGINT), SIGTERM and SIGHUP until the block is done; only the main thread
-    can do so."""
-    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+    """Delays Ctrl-C (SIGINT), SIGTERM and SIGHUP until the block is done. Their Python handlers
+    are swapped for one that only notes them: the system may deliver a signal to any thread (the
+    engine's, the writers'), so blocking it in the main thread alone did not hold it, and a stop
+    in the middle of the renames left the earlier files' backups behind. After a block that
+    completed, the first noted signal goes to the handler it would have reached. Only the main
+    thread can swap them."""
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    held = {signal.SIGINT} | {getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)}
-    signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    noted: list[int] = []
+    previous = {}
+    for signum in _held_signals():
+        try:
+            previous[signum] = signal.signal(signum, lambda number, frame: noted.append(number))
+        except (ValueError, OSError):
+            pass
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, held)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    if noted:
+        handler = previous.get(noted[0])
+        if callable(handler):
+            handler(noted[0], None)
+        elif handler == signal.SIG_DFL:
+            signal.raise_signal(noted[0])
