@@ -5,7 +5,6 @@ Errors print one line and exit with code 2; Ctrl-C exits with 130, and SIGTERM o
 """
 from __future__ import annotations
 
-import contextlib
 import signal
 import sys
 import warnings
@@ -13,14 +12,10 @@ import warnings
 from .. import Cancelled, io
 from . import commands
 from .parser import build_parser, join_signed_values
+from .stop_signals import STOP_SIGNALS, handlers_swapped
 
 EXIT_ERROR = 2
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, what shells report for Ctrl-C
-
-# What a batch scheduler's time limit, `timeout` or a closed terminal sends: by default they end
-# the process at once, and the temporary files of the output were left behind.
-STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
-
 
 class Terminated(KeyboardInterrupt):
     """SIGTERM or SIGHUP, stopping a command as Ctrl-C does: its temporary files are removed."""
@@ -33,7 +28,7 @@ class Terminated(KeyboardInterrupt):
 def _ignore_stops_from_now_on() -> None:
     """The first stop is heard; the ones after it (a closed terminal sends SIGHUP twice) must
     not cut short the removal of the temporary files it starts."""
-    for signum in (signal.SIGINT,) + STOP_SIGNALS:
+    for signum in STOP_SIGNALS:
         signal.signal(signum, signal.SIG_IGN)
 
 
@@ -47,24 +42,9 @@ def _raise_interrupt(signum, frame):
     raise KeyboardInterrupt
 
 
-@contextlib.contextmanager
-def _stop_signals_as_interrupts():
-    """SIGTERM and SIGHUP raise Terminated, and Ctrl-C KeyboardInterrupt, in the main thread for
-    as long as the block runs, each only once (where the process has not set them aside:
-    nohup's SIGHUP stays ignored). The handlers before are back once the block has cleaned up."""
-    previous = {}
-    for signum in (signal.SIGINT,) + STOP_SIGNALS:
-        try:
-            if signal.getsignal(signum) is signal.SIG_IGN:
-                continue
-            previous[signum] = signal.signal(signum, _raise_interrupt if signum == signal.SIGINT else _raise_terminated)
-        except (ValueError, OSError):  # not the main thread: the defaults stay
-            pass
-    try:
-        yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
+def _stop_handler(signum):
+    """SIGTERM and SIGHUP raise Terminated, and Ctrl-C KeyboardInterrupt, each only once."""
+    return _raise_interrupt if signum == signal.SIGINT else _raise_terminated
 
 
 def _what_was_written() -> str:
@@ -118,7 +98,7 @@ def main(argv=None) -> int:
     from .staged_output import forget_commits
     forget_commits()
     try:
-        with _stop_signals_as_interrupts():
+        with handlers_swapped(_stop_handler, keep_ignored=True):
             run(args)
     except Terminated as stop:
         print(f"pointscale: stopped by {signal.Signals(stop.signum).name}; {_what_was_written()}", file=sys.stderr)

@@ -10,8 +10,9 @@ import contextlib
 import os
 import signal
 import tempfile
-import threading
 from pathlib import Path
+
+from .stop_signals import handlers_swapped
 
 
 class StagedOutput:
@@ -149,10 +150,6 @@ def forget_commits() -> None:
     _committed = False
 
 
-def _held_signals() -> tuple:
-    return (signal.SIGINT,) + tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
-
-
 @contextlib.contextmanager
 def _sigint_held():
     """Delays Ctrl-C (SIGINT), SIGTERM and SIGHUP until the block is done. Their Python handlers
@@ -161,21 +158,9 @@ def _sigint_held():
     in the middle of the renames left the earlier files' backups behind. After a block that
     completed, the first noted signal goes to the handler it would have reached. Only the main
     thread can swap them."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
     noted: list[int] = []
-    previous = {}
-    for signum in _held_signals():
-        try:
-            previous[signum] = signal.signal(signum, lambda number, frame: noted.append(number))
-        except (ValueError, OSError):
-            pass
-    try:
+    with handlers_swapped(lambda signum: lambda number, frame: noted.append(number)) as previous:
         yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
     if noted:
         handler = previous.get(noted[0])
         if callable(handler):
