@@ -12,10 +12,12 @@ import warnings
 from .. import Cancelled, io
 from . import commands
 from .parser import build_parser, join_signed_values
+from .staged_output import committed, forget_commits
 from .stop_signals import STOP_SIGNALS, handlers_swapped
 
 EXIT_ERROR = 2
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, what shells report for Ctrl-C
+
 
 class Terminated(KeyboardInterrupt):
     """SIGTERM or SIGHUP, stopping a command as Ctrl-C does: its temporary files are removed."""
@@ -48,7 +50,6 @@ def _stop_handler(signum):
 
 
 def _what_was_written() -> str:
-    from .staged_output import committed
     return "its files were written before it stopped" if committed() else "no files were written"
 
 
@@ -95,7 +96,6 @@ def main(argv=None) -> int:
     run = {"decompose": commands.cmd_decompose, "reconstruct": commands.cmd_reconstruct,
            "info": commands.cmd_info, "demo": commands.cmd_demo}[args.command]
     warnings.showwarning = _show_warning
-    from .staged_output import forget_commits
     forget_commits()
     try:
         with handlers_swapped(_stop_handler, keep_ignored=True):
