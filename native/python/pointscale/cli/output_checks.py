@@ -213,9 +213,25 @@ def file_resolution(scan):
     info = scan.format_info
     if info.get("format") in ("las", "laz") and info.get("scales") is not None:
         return np.broadcast_to(0.5 * np.abs(np.asarray(info["scales"], dtype=np.float64)), scan.points.shape)
+    if info.get("format") == "e57":
+        return _e57_rounding(scan)
     if np.dtype(scan.precision) == np.float32:
         return 0.5 * np.spacing(np.abs(scan.points).astype(np.float32)).astype(np.float64)
     return None
+
+
+def _e57_rounding(scan):
+    """E57 files hold float32 coordinates in each scan's own frame (pye57; io.e57 writes them
+    around the scan's pose): a point rounds by half a float32 step at its distance from its
+    scan's origin, in any direction of the world (sqrt(3) of it per coordinate). Which scan a
+    point came from is not always at hand here, so the farthest origin bounds it."""
+    origins = [s.get("translation") for s in scan.format_info.get("stations") or () if isinstance(s, dict)]
+    origins = np.array([o for o in origins if o is not None], dtype=np.float64).reshape(-1, 3)
+    if len(origins) == 0:
+        origins = np.zeros((1, 3))
+    reach = np.max([np.linalg.norm(scan.points - o, axis=1) for o in origins], axis=0)
+    step = np.spacing(reach.astype(np.float32)).astype(np.float64)
+    return np.broadcast_to((np.sqrt(3.0) * 0.5 * step)[:, None], scan.points.shape)
 
 
 def level_file_rounding(base, source):
