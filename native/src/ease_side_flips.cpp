@@ -1,7 +1,6 @@
 #include "pointscale/detail/ease_side_flips.h"
 
-#include <algorithm>
-
+#include "pointscale/detail/smooth_step.h"
 #include "pointscale/parallel.h"
 
 namespace pointscale {
@@ -16,7 +15,7 @@ void ease_side_flips(Points& normals, const Points& reference) {
       const Vec3 n = normals.row(i).transpose();
       const double c = n.dot(r) / length;
       if (!(c < side_flip_band)) continue;
-      const double t = std::max(0.0, c) / side_flip_band, weight = t * t * (3.0 - 2.0 * t);
+      const double weight = smooth_step(c, 0.0, side_flip_band);
       const Vec3 eased = (1.0 - weight) * (r / length) + weight * n;  // within 90 degrees: never zero
       normals.row(i) = eased.normalized().transpose();
     }

@@ -13,6 +13,7 @@
 #include "pointscale/connected_parts.h"
 #include "pointscale/parallel.h"
 #include "pointscale/detail/plane_fit.h"
+#include "pointscale/detail/smooth_step.h"
 #include "pointscale/spatial_index.h"
 
 namespace pointscale {
@@ -258,10 +259,6 @@ constexpr double giving_up_turn = 0.26;  // cos(75 degrees)
 // circle apart have no one way between them, and the way taken would jump.
 constexpr double conformal_doubted = 0.5, conformal_trusted = 0.8;  // smaller over larger singular value
 constexpr double far_apart = 0.0872, farther_apart = 0.2588;  // cos(85 degrees), cos(75 degrees): half the turns
-double smooth_step(double t) {
-  t = std::min(1.0, std::max(0.0, t));
-  return t * t * (3.0 - 2.0 * t);
-}
 bool planar_rotation(const Vec3& c1, const Vec3& c2, const Vec3& a, const Mat3& cluster, Mat3& rotation) {
   Vec3 b = c1.cross(c2);
   const double bn = b.norm(), c1n = c1.norm();
@@ -278,14 +275,14 @@ bool planar_rotation(const Vec3& c1, const Vec3& c2, const Vec3& a, const Mat3& 
   const Vec3 r1 = cs * f1 + sn * f2, r2 = cs * f2 - sn * f1;
   rotation = r1 * t1.transpose() + r2 * t2.transpose() + b * a.transpose();
   if (agreement >= giving_up_turn) return true;
-  double weight = smooth_step(agreement / giving_up_turn);
+  double weight = smooth_step(agreement, 0.0, giving_up_turn);
   const double g11 = c1.squaredNorm(), g22 = c2.squaredNorm(), g12 = c1.dot(c2);
   const double half = 0.5 * (g11 + g22), gap = std::sqrt(0.25 * (g11 - g22) * (g11 - g22) + g12 * g12);
   const double conformal = std::sqrt(std::max(0.0, half - gap) / (half + gap));
-  const double trust = smooth_step((conformal - conformal_doubted) / (conformal_trusted - conformal_doubted));
+  const double trust = smooth_step(conformal, conformal_doubted, conformal_trusted);
   const Eigen::Quaterniond from(cluster), to(rotation);
   if (trust > 0.0) {
-    const double near = smooth_step((std::abs(from.dot(to)) - far_apart) / (farther_apart - far_apart));
+    const double near = smooth_step(std::abs(from.dot(to)), far_apart, farther_apart);
     weight = std::max(weight, trust * near);
   }
   if (!(weight > 0.0)) return false;  // the ring turned over: no rotation describes it

@@ -17,6 +17,7 @@
 #include "pointscale/detail/mirrored_edit.h"
 #include "pointscale/detail/transported_rotations.h"
 #include "pointscale/detail/reconstruct_levels.h"
+#include "pointscale/detail/smooth_step.h"
 
 namespace pointscale {
 
@@ -60,12 +61,6 @@ std::vector<HangFromFoot> hang_from_feet(const Points& original, const Points& e
   std::vector<HangFromFoot> all;
   for (std::vector<HangFromFoot>& part : found) all.insert(all.end(), part.begin(), part.end());
   return all;
-}
-
-// 0 at or below from, 1 at or above to, smooth in between.
-inline double smooth_step(double x, double from, double to) {
-  const double t = std::clamp((x - from) / (to - from), 0.0, 1.0);
-  return t * t * (3.0 - 2.0 * t);
 }
 
 // Which way point h.point's offset from its edited base position goes, given its offset w

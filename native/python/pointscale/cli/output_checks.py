@@ -153,10 +153,13 @@ def read_base(path: str, n_points: int, source, stored=None, threads: int = 0, d
         raise ValueError(f"--base {path} has {base.n_points} points; the decomposition has {n_points} "
                          "(edit level_0 without adding or removing vertices)")
     base = _in_input_order(base, source)
-    if stored is not None and dec is not None:
-        _refuse_other_level(path, base, stored, dec, source)
     if stored is not None:
-        base = _unedited_at_full_precision(path, base, source, stored)
+        resolution = level_file_rounding(base, source)
+        unedited = within_resolution(base.points, stored, resolution)
+        # Most of level 0 left where it was, the common case, is told without rebuilding a level.
+        if dec is not None and unedited.mean() <= OTHER_LEVEL_SHARE:
+            _refuse_other_level(path, base, stored, dec, source, resolution)
+        base = _unedited_at_full_precision(path, base, source, stored, resolution, unedited)
     if source is not None and source.n_faces and base.n_faces:
         shared = _share_of_faces_kept(base.faces, source.faces)
         if shared < FACES_KEPT:
@@ -175,13 +178,11 @@ def read_base(path: str, n_points: int, source, stored=None, threads: int = 0, d
 OTHER_LEVEL_SHARE = 0.5
 
 
-def _refuse_other_level(path: str, base, stored: np.ndarray, dec, source) -> None:
+def _refuse_other_level(path: str, base, stored: np.ndarray, dec, source, resolution) -> None:
     """Refuses a level file other than level 0 given as --base (level_3.ply beside level_0.ply,
     one tab completion away): its detail would be added twice (a scan's points ended up 1 m off,
-    without a word). Told by where its points lie: on another level's, as the file rounds them."""
-    resolution = level_file_rounding(base, source)
-    if within_resolution(base.points, stored, resolution).mean() > OTHER_LEVEL_SHARE:
-        return  # level 0, edited here and there: the common case, told without rebuilding a level
+    without a word). Told by where its points lie: on another level's, as the file rounds them
+    (resolution: level_file_rounding)."""
     from ..multiscale import reconstruct
     finest = dec.n_bands
     # Level l rebuilt with the bands above it at gain 0, one level at a time: dec.level() would
@@ -211,8 +212,9 @@ def file_resolution(scan):
     the last place of single precision (float32 PLY, MeshLab's and CloudCompare's files, and the
     level files of a float32 input). Levels written in such a file come back rounded by it."""
     info = scan.format_info
-    if info.get("format") in ("las", "laz") and info.get("scales") is not None:
-        return np.broadcast_to(0.5 * np.abs(np.asarray(info["scales"], dtype=np.float64)), scan.points.shape)
+    las = _las_half_step(info, scan.points.shape)
+    if las is not None:
+        return las
     if info.get("format") == "e57":
         return _e57_rounding(scan)
     if np.dtype(scan.precision) == np.float32:
@@ -234,16 +236,23 @@ def _e57_rounding(scan):
     return np.broadcast_to((np.sqrt(3.0) * 0.5 * step)[:, None], scan.points.shape)
 
 
+def _las_half_step(info: dict, shape) -> np.ndarray | None:
+    """Half a step of the scaled integers of the LAS file `info` describes, as `shape`, or None
+    for a file of another format."""
+    if info.get("format") not in ("las", "laz") or info.get("scales") is None:
+        return None
+    return np.broadcast_to(0.5 * np.abs(np.asarray(info["scales"], dtype=np.float64)), shape)
+
+
 def level_file_rounding(base, source):
     """How far a level file's vertices may lie from the stored level as `base` was read: its own
     file's rounding, plus, for a LAS input, the rounding of the level file decompose wrote on the
     input's grid (a level_0.las re-saved with other offsets or a finer scale rounds twice), or
     None for none."""
     own = file_resolution(base)
-    info = source.format_info if source is not None else {}
-    if info.get("format") not in ("las", "laz") or info.get("scales") is None:
+    written = _las_half_step(source.format_info, base.points.shape) if source is not None else None
+    if written is None:
         return own
-    written = np.broadcast_to(0.5 * np.abs(np.asarray(info["scales"], dtype=np.float64)), base.points.shape)
     return written if own is None else own + written
 
 
@@ -256,18 +265,17 @@ def within_resolution(points: np.ndarray, reference: np.ndarray, resolution) -> 
     return np.all(np.abs(points - reference) <= resolution * (1.0 + 1e-9), axis=1)
 
 
-def _unedited_at_full_precision(path: str, base, source, stored: np.ndarray):
+def _unedited_at_full_precision(path: str, base, source, stored: np.ndarray, resolution, unedited: np.ndarray):
     """A base saved in a file that rounds coordinates (LAS's scaled integers; single precision,
     what MeshLab and Blender write): its vertices that the file holds as the stored level 0
     rounded are taken as the stored ones (unedited), as the Blender add-on takes them, so an
     unedited round trip stays exact and a local edit leaves the rest as it was (read back from
     a LAS file at 1 mm, an unedited level 0 moved a tenth of the points by up to 3.7 mm). The
     edited ones keep the file's rounding; where that is float32's far from the origin of a
-    decomposition in double, which moves them and their detail visibly, it is said."""
-    resolution = level_file_rounding(base, source)
+    decomposition in double, which moves them and their detail visibly, it is said.
+    resolution: level_file_rounding; unedited: within_resolution of the stored level 0."""
     if resolution is None:
         return base
-    unedited = within_resolution(base.points, stored, resolution)
     points = base.points.copy()
     points[unedited] = stored[unedited]
     double = source is None or np.dtype(source.precision) == np.float64
