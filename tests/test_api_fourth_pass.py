@@ -190,8 +190,8 @@ def test_a_folder_or_a_file_of_another_kind_is_named_for_what_it_is(tmp_path):
         ps.load(tmp_path / "scan.ply")  # np.load said 'Cannot load file containing pickled data'
     r = _cli("info", "scan.ply", cwd=tmp_path)
     assert r.returncode != 0 and "not a decomposition file" in r.stderr and "pickle" not in r.stderr
-    r = _cli("decompose", "scan.ply", "-o", "out", "--format", ".txt", cwd=tmp_path)
-    assert r.returncode != 0 and "--format .txt: unknown extension '.txt'" in r.stderr
+    r = _cli("decompose", "scan.ply", "-o", "out", "--format", ".png", cwd=tmp_path)
+    assert r.returncode != 0 and "--format .png: unknown extension '.png'" in r.stderr
 
 
 def test_the_command_line_speaks_of_its_own_options(tmp_path):

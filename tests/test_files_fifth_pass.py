@@ -156,16 +156,24 @@ def test_xyz_comment_lines_are_kept_into_xyz_and_ply_and_said_lost_elsewhere(tmp
         io.write(tmp_path / "out.pts", ply)
 
 
-@pytest.mark.parametrize("delimiter,header,hint", [
-    (",", None, "parted by spaces or tabs, not commas"),
-    (";", None, "parted by spaces or tabs, not commas or semicolons"),
-    (" ", "X Y Z", "must start with # or //"),
-])
-def test_an_unreadable_xyz_says_what_it_needs(tmp_path, delimiter, header, hint):
+def test_an_unreadable_xyz_says_what_it_needs(tmp_path):
     path = tmp_path / "odd.xyz"
-    np.savetxt(path, _plane(50), delimiter=delimiter, fmt="%.4f", header=header or "", comments="")
-    with pytest.raises(ValueError, match=hint):
+    np.savetxt(path, _plane(50), fmt="%.4f", header="X Y Z", comments="")
+    with pytest.raises(ValueError, match="must start with # or //"):
         io.read(path)
+    # a decimal comma, values parted by semicolons (as spreadsheets in many languages write)
+    path.write_text("".join(";".join(f"{v:.4f}".replace(".", ",") for v in row) + "\n" for row in _plane(50)))
+    with pytest.raises(ValueError, match="need a decimal point"):
+        io.read(path)
+
+
+@pytest.mark.parametrize("delimiter", [",", ";", "\t"])
+def test_an_xyz_parted_by_commas_semicolons_or_tabs_reads_as_parted_by_spaces(tmp_path, delimiter):
+    """CloudCompare's ASCII export offers space, comma, semicolon and tab as separators."""
+    points = _plane(50)
+    np.savetxt(tmp_path / "spaces.xyz", points, fmt="%.17g")
+    np.savetxt(tmp_path / "other.xyz", points, delimiter=delimiter, fmt="%.17g")
+    assert np.array_equal(io.read(tmp_path / "other.xyz").points, io.read(tmp_path / "spaces.xyz").points)
 
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs named pipes")

@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import Mirror, decompose, io, reconstruct, shapes
-from .folder import DECOMPOSITION_FILE, SOURCE_FILE, level_name, read_decomposition
+from .folder import (DECOMPOSITION_FILE, SOURCE_FILE, TEXT_CLOUD_EXTENSIONS, level_extension, level_name,
+                     read_decomposition)
 from .level_files import (FORMATS_WITH_VERTEX_SCALARS, ResultOverflow, finest_normals, level_scan,
                           reconstruct_with_normals)
 from .output_checks import (check_format_holds, check_input_kept, check_output_file, check_output_folder, read_base,
@@ -159,8 +160,11 @@ def cmd_decompose(args) -> None:
     if args.format:
         extension = writable_extension("level" + "." * (not args.format.startswith(".")) + args.format, "--format",
                                        shown=args.format)
+        if extension in TEXT_CLOUD_EXTENSIONS:
+            raise ValueError(f"--format {args.format}: level files are never {extension} (a file of that name beside "
+                             f"them may be anyone's); a text cloud's levels are .xyz, the same columns")
     else:
-        extension = writable_extension(args.input, "input")
+        extension = level_extension(writable_extension(args.input, "input"))
     check_input_kept(Path(args.input), out)  # first: --force would not help
     earlier = check_output_folder(out, args.force)
     stages = {"reading": 1.0, "decomposing": 5.0, "levels": 0.6, "writing": 1.6}

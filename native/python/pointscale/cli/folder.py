@@ -24,6 +24,18 @@ SOURCE_FILE = "source.npz"
 _LEVEL_FILE = re.compile(r"^level_(0|[1-9][0-9]*)(\.[a-z0-9]+)$")
 
 
+# CloudCompare's ASCII clouds: read, and written by reconstruct -o, but never the extension of a
+# level file (a text cloud's levels are .xyz, the same columns): a user's notes in level_1.txt
+# beside the levels must not count as one of them.
+TEXT_CLOUD_EXTENSIONS = (".txt", ".asc")
+LEVEL_EXTENSIONS = tuple(e for e in io.SUPPORTED_EXTENSIONS if e not in TEXT_CLOUD_EXTENSIONS)
+
+
+def level_extension(input_extension: str) -> str:
+    """The extension of the level files of an input with this one: its own, or .xyz for a text cloud."""
+    return ".xyz" if input_extension in TEXT_CLOUD_EXTENSIONS else input_extension
+
+
 def level_name(level: int, extension: str) -> str:
     return f"level_{level}{extension}"
 
@@ -39,7 +51,7 @@ def owned_files(folder: Path) -> list[Path]:
 
 def is_level_file(name: str) -> bool:
     match = _LEVEL_FILE.match(name)
-    return match is not None and match.group(2) in io.SUPPORTED_EXTENSIONS
+    return match is not None and match.group(2) in LEVEL_EXTENSIONS
 
 
 def model_file(path: Path) -> Path:

@@ -64,10 +64,10 @@ NORMAL_NAMES = ("nx", "ny", "nz")
 
 
 # Formats with room for a vertex scalar of our own; decompose warns that the others leave the detail out.
-FORMATS_WITH_VERTEX_SCALARS = (".ply", ".las", ".laz", ".xyz")
+FORMATS_WITH_VERTEX_SCALARS = (".ply", ".las", ".laz", ".xyz", ".txt", ".asc")
 # Formats that store normals as vertex properties named nx, ny, nz (the others, OBJ's vn or
 # OFF's NOFF columns, keep them apart from the attributes, which cannot clash with them).
-FORMATS_NAMING_NORMALS = (".ply", ".las", ".laz", ".xyz")
+FORMATS_NAMING_NORMALS = (".ply", ".las", ".laz", ".xyz", ".txt", ".asc")
 
 
 def level_scan(template, points: np.ndarray, normals: np.ndarray, detail, extension: str):

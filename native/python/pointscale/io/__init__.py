@@ -30,12 +30,14 @@ _FORMATS = {
     ".off": (mesh_formats.read_off, mesh_formats.write_off),
     ".stl": (mesh_formats.read_stl, mesh_formats.write_stl),
     ".xyz": (text.read_xyz, text.write_xyz),
+    ".txt": (text.read_xyz, text.write_cloudcompare),  # CloudCompare's ASCII clouds
+    ".asc": (text.read_xyz, text.write_cloudcompare),
     ".pts": (text.read_pts, text.write_pts),
     ".e57": (e57.read_e57, e57.write_e57),
 }
 SUPPORTED_EXTENSIONS = tuple(_FORMATS)
 # Point-cloud formats: a mesh written to them keeps its points and loses its faces.
-_FORMATS_WITHOUT_FACES = (".las", ".laz", ".xyz", ".pts", ".e57")
+_FORMATS_WITHOUT_FACES = (".las", ".laz", ".xyz", ".txt", ".asc", ".pts", ".e57")
 
 __all__ = ["Scan", "SUPPORTED_EXTENSIONS", "atomic_write", "read", "read_ply", "write", "write_ply"]
 
@@ -69,7 +71,7 @@ def write(path, scan: Scan) -> None:
     if scan.n_faces and suffix in _FORMATS_WITHOUT_FACES:
         warnings.warn(f"{os.fspath(path)}: {suffix} has no place for faces; {scan.n_faces} faces"
                       f"{' and their attributes' if scan.face_attributes else ''} not written", stacklevel=2)
-    if suffix not in (".ply", ".xyz", ".obj") and scan.format_info.get("format") in ("ply", "xyz", "pts", "obj"):
+    if suffix not in (".ply", ".xyz", ".txt", ".asc", ".obj") and scan.format_info.get("format") in ("ply", "xyz", "pts", "obj"):
         from .text import kept_comments
         lines = kept_comments(scan)
         if lines:  # a CRS in a comment is the kind of thing that must not vanish unsaid

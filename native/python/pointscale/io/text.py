@@ -1,6 +1,10 @@
-"""XYZ and PTS: whitespace-separated text, one point a line.
+"""XYZ and PTS: text, one point a line.
 
-.xyz  x y z [nx ny nz] [more columns]. A comment line "# x y z nx ny nz red:u1 ..." at the top
+.xyz  x y z [nx ny nz] [more columns], parted by spaces or tabs, or by commas or semicolons as
+      the first row is; a line with a single whole number right below the comment lines is
+      CloudCompare's point count, checked against the rows. CloudCompare's ASCII clouds (.txt,
+      .asc) are read the same way, and written with a header line that starts with "//", the one
+      comment mark CloudCompare's reader knows. A comment line "# x y z nx ny nz red:u1 ..." at the top
       (what write_xyz puts first when the scan has attributes; "//X Y Z R G B" from CloudCompare
       works too, also below other comment lines such as a CRS) names the columns and gives their
       dtypes; without it (or when no comment names every column, starting with x y z), columns 4-6 are normals when every row of them has unit length, and other
@@ -44,7 +48,7 @@ _PTS_COLUMNS = {3: (), 4: ("intensity",), 6: ("red", "green", "blue"), 7: ("inte
 
 def read_xyz(path) -> Scan:
     path = os.fspath(path)
-    comments, rows = _load(path, skip_first=False)
+    comments, rows, layout = _load_xyz(path)
     # The header is the comment line that names the columns, wherever it stands among the
     # comments at the top (a CRS line above it, as some exports write); else the first one.
     naming = [c for c in comments if _names_columns(c, rows.shape[1])]
@@ -56,9 +60,9 @@ def read_xyz(path) -> Scan:
         for comment in comments:
             _warn_if_header_unread(path, comment, rows.shape[1])
         names, dtypes = _guess_xyz_columns(rows)
-    exact = _wide_integer_columns(path, names, dtypes, skip=len(comments)) if names_given else {}
+    exact = _wide_integer_columns(path, names, dtypes, layout) if names_given else {}
     declared = _declared_columns(header, rows.shape[1]) if names_given else set()
-    exact.update(_undeclared_wide_integers(path, rows, names, declared, skip=len(comments)))
+    exact.update(_undeclared_wide_integers(path, rows, names, declared, layout))
     for i, values in exact.items():
         dtypes[i] = values.dtype.str
     if names_given:
@@ -106,7 +110,7 @@ def _declared_columns(header: str, ncols: int) -> set:
     return {i for i, token in enumerate(_header_tokens(header, ncols) or []) if ":" in token}
 
 
-def _undeclared_wide_integers(path: str, rows: np.ndarray, names: list, declared: set, skip: int) -> dict:
+def _undeclared_wide_integers(path: str, rows: np.ndarray, names: list, declared: set, layout: "_Layout") -> dict:
     """Column index -> exact values of undeclared columns of whole numbers beyond 2**53 (ids,
     timestamps in ns), which the float64 rows hold only rounded: read again as text and kept as
     int64 (uint64 past its range). A column written with a decimal point or an exponent stays
@@ -115,7 +119,7 @@ def _undeclared_wide_integers(path: str, rows: np.ndarray, names: list, declared
             and np.all(rows[:, i] == np.round(rows[:, i])) and np.abs(rows[:, i]).max() >= 2.0 ** 53]
     if not wide:
         return {}
-    texts = _text_columns(path, wide, skip)
+    texts = _text_columns(path, wide, layout)
     out = {}
     for j, i in enumerate(wide):
         try:
@@ -153,7 +157,7 @@ def _pts_rows(path: str):
         raise ValueError(f"no such file: {path}")
     comments = []
     try:
-        first, rows = _load(path, skip_first=True, leading=comments)
+        first, rows = _load_pts(path, leading=comments)
     except ValueError as exc:
         single = exc  # a second count line makes loadtxt fail: try blocks
     else:
@@ -197,6 +201,16 @@ def _pts_rows(path: str):
 
 
 def write_xyz(path, scan: Scan) -> None:
+    _write_xyz(path, scan, _HEADER_MARK, always_header=False)
+
+
+def write_cloudcompare(path, scan: Scan) -> None:
+    """A .txt or .asc: XYZ's columns under a header line that is always there and starts with
+    "//", the one comment mark CloudCompare's ASCII reader knows ("#" lines it takes for rows)."""
+    _write_xyz(path, scan, "//", always_header=True)
+
+
+def _write_xyz(path, scan: Scan, mark: str, always_header: bool) -> None:
     names, columns, formats = _columns(scan, normals=True)
     spaced = [n for n in names if not n or any(c.isspace() or c in ",:" for c in n)]
     if spaced:  # the header is split on whitespace and commas, and ":" starts the dtype
@@ -206,11 +220,11 @@ def write_xyz(path, scan: Scan) -> None:
     if twice:  # read back, one of the two columns would be lost (an attribute nx beside the normals)
         raise ValueError(f"column names {twice} would appear twice in the header")
     header = None
-    if len(names) > (6 if scan.normals is not None else 3):
+    if always_header or len(names) > (6 if scan.normals is not None else 3):
         header = " ".join(f"{n}:{c.dtype.str.lstrip('<>=|')}" if i >= 3 else n
                           for i, (n, c) in enumerate(zip(names, columns)))
     _write(path, _rows(columns) if columns else None, formats, header=header, count=None,
-           comments=kept_comments(scan))
+           comments=kept_comments(scan), mark=mark)
 
 
 def write_pts(path, scan: Scan) -> None:
@@ -258,47 +272,108 @@ def _warn_if_outside_pts_intensity(path: str, intensity) -> None:
 
 # -- helpers ----------------------------------------------------------------------------------
 
-def _load(path: str, skip_first: bool, leading: list | None = None):
-    """(the first line when it is a header or count line, rows (n, c) float64). With skip_first
-    (PTS), comment lines above the count line are put into `leading`."""
+def _load_pts(path: str, leading: list):
+    """(the count line, rows (n, c) float64) of a PTS file of one block; the comment lines above
+    the count line are put into `leading`."""
     if not os.path.isfile(path):
         raise ValueError(f"no such file: {path}")
     try:
         with open_text(path, "a text file") as f:
-            header = None
-            if skip_first:
-                found = _leading_comments(f)
-                if leading is not None:
-                    leading.extend(found)
-                header = f.readline()
-            else:
-                comments = _leading_comments(f)
-                header = comments[0] if comments else None
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")  # "input contained no data": reported below as no vertices
-                rows = np.loadtxt(f, dtype=np.float64, ndmin=2, comments=None if skip_first else "#")
+            leading.extend(_leading_comments(f))
+            header = f.readline()
+            rows = _rows_of(f, delimiter=None, comments=None)
     except ValueError as exc:
-        if str(exc).startswith(path):  # open_text's own words
-            raise
-        # NumPy's advice names its own options (usecols), not the file's: left out.
-        reason = re.sub(r";\s*use `usecols`.*$", "", _first_line(exc))
-        raise ValueError(f"{path}: unreadable row ({reason}){_unreadable_hint(str(exc))}") from None
+        _raise_unreadable(path, exc)
     except OSError as exc:
         raise ValueError(f"{path}: cannot read ({exc})") from None
+    _check_rows(path, rows)
+    return header, rows
+
+
+class _Layout:
+    """How an XYZ file's rows are laid out: the lines above them (comment lines, and a count line
+    where there is one) and what parts their values (None: spaces or tabs)."""
+
+    def __init__(self, skip: int, delimiter: str | None):
+        self.skip, self.delimiter = skip, delimiter
+
+
+def _load_xyz(path: str):
+    """(the comment lines' texts, rows (n, c) float64, _Layout). Besides spaces and tabs, the
+    values may be parted by commas or semicolons, as CloudCompare's ASCII export offers (told
+    from the first row, as CloudCompare's reader tells it); a line holding a single whole number
+    right below the comment lines is CloudCompare's point count, checked against the rows."""
+    if not os.path.isfile(path):
+        raise ValueError(f"no such file: {path}")
+    count = None
+    try:
+        with open_text(path, "a text file") as f:
+            comments = _leading_comments(f)
+            where = f.tell()
+            words = f.readline().split()
+            if len(words) == 1 and words[0].isdigit():
+                count = int(words[0])
+                where = f.tell()
+            first = f.readline()
+            f.seek(where)
+            delimiter = _delimiter(first)
+            rows = _rows_of(f, delimiter=delimiter, comments="#")
+    except ValueError as exc:
+        _raise_unreadable(path, exc)
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read ({exc})") from None
+    _check_rows(path, rows)
+    if count is not None and count != len(rows):
+        raise ValueError(f"{path}: the count line says {count} points, the file has {len(rows)} (truncated?)")
+    return comments, rows, _Layout(len(comments) + (count is not None), delimiter)
+
+
+def _delimiter(line: str) -> str | None:
+    """What parts the values of a row: None (spaces or tabs), or "," or ";" where the row parted
+    at it gives three numbers or more and parted at spaces does not. A comma as decimal mark
+    ("1,5;2,25;3") is none of these: the row then stays unreadable, with the hint that says so."""
+    def all_numbers(parts):
+        try:
+            return len(parts) >= 3 and all(isinstance(float(p), float) for p in parts)
+        except ValueError:
+            return False
+    if all_numbers(line.split()):
+        return None
+    for mark in (",", ";"):
+        if all_numbers([p.strip() for p in line.split(mark)]):
+            return mark
+    return None
+
+
+def _rows_of(f, delimiter: str | None, comments: str | None) -> np.ndarray:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # "input contained no data": reported below as no vertices
+        return np.loadtxt(f, dtype=np.float64, ndmin=2, comments=comments, delimiter=delimiter)
+
+
+def _raise_unreadable(path: str, exc: ValueError):
+    if str(exc).startswith(path):  # open_text's own words
+        raise exc
+    # NumPy's advice names its own options (usecols), not the file's: left out.
+    reason = re.sub(r";\s*use `usecols`.*$", "", _first_line(exc))
+    raise ValueError(f"{path}: unreadable row ({reason}){_unreadable_hint(str(exc))}") from None
+
+
+def _check_rows(path: str, rows: np.ndarray) -> None:
     if rows.size == 0:
         raise ValueError(f"{path}: no vertices")
     if rows.shape[1] < 3:
         raise ValueError(f"{path}: rows need at least x y z, got {rows.shape[1]} columns")
-    return (header, rows) if skip_first else (comments, rows)
 
 
 def _unreadable_hint(error: str) -> str:
-    """What a row NumPy could not read usually means: values parted by commas or semicolons
-    (CSV), or column names on a first line with no comment mark."""
+    """What a row NumPy could not read usually means: commas as decimal marks, or values parted
+    otherwise than the first row's, or column names on a first line with no comment mark."""
     found = re.search(r"could not convert string '([^']*)'", error) or re.search(r"string '([^']*)'", error)
     text = found.group(1) if found else ""
     if "," in text or ";" in text:
-        return ": values must be parted by spaces or tabs, not commas or semicolons"
+        return (": values are parted by spaces, tabs, commas or semicolons, the same on every row as on the first, "
+                "and need a decimal point (a decimal comma is not read)")
     if text[:1].isalpha() and re.search(r"\bat row 0\b", error):
         return ": a first line of column names must start with # or // (as '//X Y Z R G B')"
     return ""
@@ -318,16 +393,18 @@ def _leading_comments(f) -> list:
 
 
 def _header_tokens(header: str, ncols: int) -> list | None:
-    """The names a first comment line gives the columns, or None: its words (split at spaces
-    and commas), or, when those are too many and commas part them into as many as the columns
-    (CloudCompare's "//X,Y,Z,R,G,B,GPS Time"), the comma-parted names, spaces as "_"."""
-    tokens = header.replace(",", " ").split()
+    """The names a first comment line gives the columns, or None: its words (split at spaces,
+    tabs, commas and semicolons), or, when those are too many and commas or semicolons part them
+    into as many as the columns (CloudCompare's "//X,Y,Z,R,G,B,GPS Time", which parts the names
+    as it parts the values), the names so parted, spaces as "_"."""
+    tokens = header.replace(",", " ").replace(";", " ").split()
     if len(tokens) == ncols:
         return tokens
-    if "," in header:
-        parted = [t.strip().replace(" ", "_") for t in header.split(",")]
-        if len(parted) == ncols and all(parted):
-            return parted
+    for mark in (",", ";"):
+        if mark in header:
+            parted = [t.strip().replace(" ", "_") for t in header.split(mark)]
+            if len(parted) == ncols and all(parted):
+                return parted
     return None
 
 
@@ -344,7 +421,7 @@ def _names_columns(header: str, ncols: int) -> bool:
 def _warn_if_header_unread(path: str, header: str, ncols: int) -> None:
     """A first line that starts x y z but names more or fewer columns than the rows have (a
     name with a space in it, "GPS Time") names none of them: say so, not drop the names."""
-    words = header.replace(",", " ").split()
+    words = header.replace(",", " ").replace(";", " ").split()
     if _starts_with_xyz(words):
         warnings.warn(f"{path}: the header line names {len(words)} columns but the rows have {ncols}, so its names "
                       f"are not used (columns after z are read as column_3 ... and no colours): a column name "
@@ -354,8 +431,8 @@ def _warn_if_header_unread(path: str, header: str, ncols: int) -> None:
 def _parse_header(header: str, ncols: int, path: str):
     tokens = _header_tokens(header, ncols)
     if tokens is None:
-        raise ValueError(f"{path}: the header names {len(header.replace(',', ' ').split())} columns, the rows have "
-                         f"{ncols}")
+        named = len(header.replace(",", " ").replace(";", " ").split())
+        raise ValueError(f"{path}: the header names {named} columns, the rows have {ncols}")
     names, dtypes = [], []
     for token in tokens:
         name, _, dtype = token.partition(":")
@@ -372,22 +449,24 @@ def _parse_header(header: str, ncols: int, path: str):
     return names, dtypes
 
 
-def _wide_integer_columns(path: str, names: list, dtypes: list, skip: int) -> dict:
+def _wide_integer_columns(path: str, names: list, dtypes: list, layout: "_Layout") -> dict:
     """Column index -> exact values of the columns declared as 64-bit integers (id:u8). The rows
     are parsed as float64, which holds integers only up to 2**53: 2**60 + 1 would be read as
     2**60. These columns are read again as text and converted by Python's own integers."""
     wide = [i for i, d in enumerate(dtypes) if np.dtype(d).kind in "iu" and np.dtype(d).itemsize > 4]
     if not wide:
         return {}
-    texts = _text_columns(path, wide, skip)
+    texts = _text_columns(path, wide, layout)
     return {i: _exact_integers(texts[:, j], np.dtype(dtypes[i]), f"column {names[i]}", path)
             for j, i in enumerate(wide)}
 
 
-def _text_columns(path: str, columns: list, skip: int) -> np.ndarray:
-    """The rows' values in `columns` as the text the file holds, past `skip` header lines."""
+def _text_columns(path: str, columns: list, layout: "_Layout") -> np.ndarray:
+    """The rows' values in `columns` as the text the file holds, past its header lines."""
     with open_text(path, "a text file") as f:
-        return np.loadtxt(f, dtype=str, comments="#", skiprows=skip, usecols=columns, ndmin=2)
+        for _ in range(layout.skip):
+            f.readline()
+        return np.loadtxt(f, dtype=str, comments="#", delimiter=layout.delimiter, usecols=columns, ndmin=2)
 
 
 def _exact_integers(texts: np.ndarray, dtype: np.dtype, what: str, path: str) -> np.ndarray:
@@ -511,14 +590,14 @@ def kept_comments(scan: Scan) -> list:
 
 
 def _write(path: str, rows: np.ndarray, formats: list, header: str | None, count: list | None,
-           comments: list = ()) -> None:
-    """rows under an optional header line and comment lines; with count (points per block),
-    each block of rows after a line with its count (PTS)."""
+           comments: list = (), mark: str = _HEADER_MARK) -> None:
+    """rows under an optional header line and comment lines (starting with `mark`); with count
+    (points per block), each block of rows after a line with its count (PTS)."""
     buffer = io.StringIO()
     if header is not None:
-        buffer.write(f"{_HEADER_MARK} {header}\n")
+        buffer.write(f"{mark}{' ' if mark == _HEADER_MARK else ''}{header}\n")
     for comment in comments:
-        buffer.write(f"{_HEADER_MARK} {comment}\n")
+        buffer.write(f"{mark} {comment}\n")
     start = 0
     for block in count if count is not None else [len(rows)]:
         if count is not None:
