@@ -210,13 +210,16 @@ def file_resolution(scan):
     """The largest rounding, per vertex and coordinate ((n, 3), or None for none), by which a
     file like `scan`'s stores a point: half a step of a LAS file's scaled integers, half a unit in
     the last place of single precision (float32 PLY, MeshLab's and CloudCompare's files, and the
-    level files of a float32 input). Levels written in such a file come back rounded by it."""
+    level files of a float32 input), half a step of the fixed decimals of a text file (las2txt's
+    and CloudCompare's exports). Levels written in such a file come back rounded by it."""
     info = scan.format_info
     las = _las_half_step(info, scan.points.shape)
     if las is not None:
         return las
     if info.get("format") == "e57":
         return _e57_rounding(scan)
+    if info.get("format") in ("xyz", "pts"):
+        return _text_half_step(scan.points)
     if np.dtype(scan.precision) == np.float32:
         return 0.5 * np.spacing(np.abs(scan.points).astype(np.float32)).astype(np.float64)
     return None
@@ -234,6 +237,33 @@ def _e57_rounding(scan):
     reach = np.max([np.linalg.norm(scan.points - o, axis=1) for o in origins], axis=0)
     step = np.spacing(reach.astype(np.float32)).astype(np.float64)
     return np.broadcast_to((np.sqrt(3.0) * 0.5 * step)[:, None], scan.points.shape)
+
+
+#: The most decimals a text file's coordinates are looked at with: beyond them a fixed number of
+#: decimals is no rounding worth telling apart from float64's own.
+TEXT_DECIMALS = 12
+
+
+def _text_half_step(points: np.ndarray) -> np.ndarray | None:
+    """Half a step of the fixed decimals a text file's coordinates were written with (las2txt,
+    CloudCompare's export and many scanners' software write 2 to 8), per coordinate, as
+    points' shape; None where a coordinate has no fixed number of them (our own files write
+    every digit float64 holds)."""
+    steps = [_fixed_decimals_half_step(column) for column in points.T]
+    if any(step is None for step in steps):
+        return None
+    return np.broadcast_to(np.array(steps), points.shape)
+
+
+def _fixed_decimals_half_step(column: np.ndarray) -> float | None:
+    for decimals in range(TEXT_DECIMALS + 1):
+        scaled = column * 10.0 ** decimals
+        if np.abs(scaled).max() >= 2.0 ** 52:  # past float64's whole numbers: no decimals left to tell
+            return None
+        # Read back, k / 10^d times 10^d gives k to a few units in float64's last place.
+        if np.all(np.abs(scaled - np.round(scaled)) <= 8.0 * np.spacing(np.maximum(np.abs(scaled), 1.0))):
+            return 0.5 * 10.0 ** -decimals
+    return None
 
 
 def _las_half_step(info: dict, shape) -> np.ndarray | None:
@@ -261,8 +291,11 @@ def within_resolution(points: np.ndarray, reference: np.ndarray, resolution) -> 
     in every coordinate (exactly equal where there is none)."""
     if resolution is None:
         return np.all(points == reference, axis=1)
-    # A rounding exactly halfway is the file's either way: a hair more than half a step.
-    return np.all(np.abs(points - reference) <= resolution * (1.0 + 1e-9), axis=1)
+    # A rounding exactly halfway is the file's either way: a hair more than half a step, and the
+    # few units in float64's last place by which the step's decimal is not a binary number
+    # (5180000.123455 written with 5 decimals came back 5.00027e-6 away).
+    slack = 4.0 * np.spacing(np.maximum(np.abs(points), np.abs(reference)))
+    return np.all(np.abs(points - reference) <= resolution * (1.0 + 1e-9) + slack, axis=1)
 
 
 def _unedited_at_full_precision(path: str, base, source, stored: np.ndarray, resolution, unedited: np.ndarray):
