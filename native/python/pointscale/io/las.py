@@ -8,7 +8,8 @@ extra bytes nx, ny, nz (float32 unless the file had float64). Only float extra b
 are read as normals; others of those names (a lone nx, uint8 nx, ny, nz) are the user's fields.
 
 A Scan from another format is written as LAS 1.4, point format 7 when it has red/green/blue
-(8-bit colours are scaled by 257 to LAS's 16 bits) and 6 otherwise; the offset is the bounding
+(8-bit colours are scaled by 257 to LAS's 16 bits, float colours and a float intensity within
+0..1 by 65535, rounded) and 6 otherwise; the offset is the bounding
 box minimum and the scale the power of ten at or below 1e-6 of the bounding box diagonal, so
 coordinates are kept to half of that (e.g. 1e-7 m for a 0.3 m scan, 1 mm for a 2 km site).
 Attributes named as a standard field but for case, spaces or underscores (CloudCompare's
@@ -28,6 +29,7 @@ from .atomic import atomic_write
 from .las_checks import check_chunk_table, check_layout
 from .optional import optional_module
 from .scan import Scan
+from .text_tables import FRACTION_SLACK
 
 COORDINATE_FIELDS = ("X", "Y", "Z")
 NORMAL_NAMES = ("nx", "ny", "nz")
@@ -134,7 +136,7 @@ def write_las(path, scan: Scan) -> None:
         header.scales, header.offsets = scales, offsets
         standard = {d.name: d for d in header.point_format.dimensions
                     if d.is_standard and d.name not in COORDINATE_FIELDS}
-        values, extra_params = _fields(scan, attributes, standard, info, laspy)
+        values, extra_params = _fields(scan, attributes, standard, info, laspy, path)
         for params in extra_params:
             header.add_extra_dim(params)
         for key in ("file_source_id", "system_identifier", "generating_software"):
@@ -188,7 +190,7 @@ def _offsets_that_fit(points, scales, offsets, path):
     return new
 
 
-def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy):
+def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy, path: str = ""):
     """(name -> values for the point records, [ExtraBytesParams] for fields the format lacks)."""
     values, params = {}, []
     declared = {d["name"]: d for d in info.get("extra_dimensions", [])}
@@ -204,6 +206,7 @@ def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy):
     foreign = not info
     if foreign:
         attributes = _standard_names(attributes, standard)
+        attributes = _fractions_to_sixteen_bits(attributes, standard, path)
     for name, column in attributes.items():
         column = np.asarray(column)
         if name in standard:
@@ -245,6 +248,38 @@ def _fields(scan: Scan, attributes: dict, standard: dict, info: dict, laspy):
             raise ValueError(f"attribute {p.name!r} is longer than the 32 bytes a LAS extra-bytes name holds: "
                              "rename it, or write a format that keeps it (.ply)")
     return values, params
+
+
+def _fractions_to_sixteen_bits(attributes: dict, standard: dict, path: str) -> dict:
+    """Float colours (judged together, as one colour) and a float intensity within 0..1, as
+    renderers and E57 files hold them, scaled to LAS's 16-bit fields: 65535 * value, rounded
+    (within FRACTION_SLACK of the range: clipped first), with a warning when that rounds them.
+    Floats outside 0..1 are left as they are (whole numbers fill the field, others become
+    extra bytes with a warning)."""
+    out = dict(attributes)
+    groups = [tuple(c for c in _COLOURS if c in standard)]
+    if "intensity" in standard:
+        groups.append(("intensity",))
+    for names in groups:
+        if not names or not all(n in out for n in names):
+            continue
+        columns = [np.asarray(out[n]) for n in names]
+        if not any(c.dtype.kind == "f" for c in columns) or any(c.ndim != 1 or c.dtype.kind not in "biuf"
+                                                               for c in columns):
+            continue
+        stacked = np.concatenate(columns).astype(np.float64)
+        if stacked.size == 0 or not np.isfinite(stacked).all() or stacked.min() < -FRACTION_SLACK \
+                or stacked.max() > 1 + FRACTION_SLACK:
+            continue
+        scaled = [np.round(np.clip(c.astype(np.float64), 0.0, 1.0) * 65535) for c in columns]
+        for n, v in zip(names, scaled):
+            out[n] = v.astype(np.uint16)
+        if not np.array_equal(np.concatenate(scaled), stacked * 65535):
+            what = "colours " + ", ".join(names) if len(names) > 1 else names[0]
+            warnings.warn(f"{path}: {what} of 0..1 (float) written to LAS's 16-bit "
+                          f"field{'s' if len(names) > 1 else ''} as 65535 * value, rounded (within "
+                          f"{0.5 / 65535:.1e} of each value; read back as 0..65535)", stacklevel=5)
+    return out
 
 
 def _plain(name: str) -> str:
