@@ -69,3 +69,83 @@ def test_float_colours_outside_0_to_1_keep_the_extra_bytes_path(tmp_path):
     assert "'red' (float64) does not fit the LAS field; kept as extra bytes 'red_value'" in text, text
     back = io.read(tmp_path / "c.las")
     assert np.array_equal(back.vertex_attributes["red_value"], red)
+
+
+_WKT = 'PROJCS["ETRS89 / UTM zone 32N",\n  GEOGCS["ETRS89",DATUM["European_Terrestrial_Reference_System_1989"]],\n  UNIT["metre",1]]'
+
+
+def _georeferenced_las(path, records):
+    laspy = pytest.importorskip("laspy")
+    header = laspy.LasHeader(point_format=6, version="1.4")
+    header.scales, header.offsets = np.full(3, 0.001), np.array([500000.0, 5000000.0, 100.0])
+    for record_id, data in records:
+        header.vlrs.append(laspy.VLR(user_id="LASF_Projection", record_id=record_id, description="crs",
+                                     record_data=data))
+    las = laspy.LasData(header)
+    points = _cloud(500)
+    las.x, las.y, las.z = points.T
+    las.write(str(path))
+    return points
+
+
+def _geokeys(*entries):
+    keys = [1, 1, 0, len(entries)]
+    for key, value in entries:
+        keys += [key, 0, 1, value]
+    return np.array(keys, dtype="<u2").tobytes()
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".xyz", ".obj", ".txt"])
+def test_a_las_wkt_crs_is_written_as_a_comment_line_where_the_format_keeps_them(tmp_path, suffix):
+    """A LAS file's coordinate system vanished unsaid when written to PLY, XYZ, OBJ..."""
+    _georeferenced_las(tmp_path / "geo.las", [(2112, _WKT.encode() + b"\0")])
+    scan = io.read(tmp_path / "geo.las")
+    with pytest.warns(UserWarning, match=r"no field for the LAS coordinate system 'ETRS89 / UTM zone 32N'; "
+                                         r"written as the comment line 'crs: PROJCS"):
+        io.write(tmp_path / f"out{suffix}", scan)
+    one_line = "crs: " + " ".join(part.strip() for part in _WKT.splitlines())
+    assert io.read(tmp_path / f"out{suffix}").format_info["comments"] == [one_line]
+
+
+@pytest.mark.parametrize("suffix", [".e57", ".pts", ".off"])
+def test_a_las_crs_a_format_cannot_hold_is_named_in_a_warning(tmp_path, suffix):
+    if suffix == ".e57":
+        pytest.importorskip("pye57")
+    _georeferenced_las(tmp_path / "geo.las", [(2112, _WKT.encode() + b"\0")])
+    scan = io.read(tmp_path / "geo.las")
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        io.write(tmp_path / f"out{suffix}", scan)
+    assert any(f"{suffix} has no place for the LAS coordinate system 'ETRS89 / UTM zone 32N'; not written"
+               in str(w.message) for w in said), [str(w.message) for w in said]
+
+
+def test_geotiff_keys_give_an_epsg_comment_and_las_to_las_keeps_the_records(tmp_path):
+    laspy = pytest.importorskip("laspy")
+    keys = _geokeys((1024, 1), (3072, 25832), (4096, 5783))
+    citation = b"ETRS89 / UTM zone 32N|\0"
+    _georeferenced_las(tmp_path / "geo.las", [(34735, keys), (34737, citation)])
+    scan = io.read(tmp_path / "geo.las")
+    with pytest.warns(UserWarning, match=r"'ETRS89 / UTM zone 32N \(EPSG:25832 \+ EPSG:5783\)'"):
+        io.write(tmp_path / "out.ply", scan)
+    assert io.read(tmp_path / "out.ply").format_info["comments"] == ["crs: EPSG:25832 + EPSG:5783"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # LAS to LAS: the records as they are, nothing said
+        io.write(tmp_path / "out.las", scan)
+    records = [(v.user_id, v.record_id, v.record_data_bytes() if hasattr(v, "record_data_bytes") else bytes(v.record_data))
+               for v in laspy.read(tmp_path / "out.las").header.vlrs]
+    assert ("LASF_Projection", 34735, keys) in records and ("LASF_Projection", 34737, citation) in records
+
+
+def test_the_crs_reaches_every_level_file_of_decompose_format_ply(tmp_path):
+    _georeferenced_las(tmp_path / "geo.las", [(2112, _WKT.encode() + b"\0")])
+    done = run_cli("decompose", str(tmp_path / "geo.las"), "-o", str(tmp_path / "out"), "--levels", "3",
+                   "--format", ".ply")
+    assert done.returncode == 0, done.stderr
+    assert "coordinate system 'ETRS89 / UTM zone 32N'" in done.stderr
+    for level in range(3):
+        comments = io.read(tmp_path / "out" / f"level_{level}.ply").format_info["comments"]
+        assert comments[0].startswith('crs: PROJCS["ETRS89 / UTM zone 32N", GEOGCS'), comments
+    done = run_cli("reconstruct", str(tmp_path / "out"), "-o", str(tmp_path / "back.e57"))
+    if done.returncode == 0:
+        assert "no place for the LAS coordinate system 'ETRS89 / UTM zone 32N'" in done.stderr

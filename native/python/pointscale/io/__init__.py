@@ -77,6 +77,8 @@ def write(path, scan: Scan) -> None:
         if lines:  # a CRS in a comment is the kind of thing that must not vanish unsaid
             warnings.warn(f"{os.fspath(path)}: {suffix} has no place for the input's comment lines; {len(lines)} not "
                           f"written (the first: {lines[0][:60]!r}); .ply, .xyz and .obj keep them", stacklevel=2)
+    if suffix not in (".las", ".laz"):
+        _warn_of_the_coordinate_system(os.fspath(path), suffix, scan)
     try:
         writer(os.fspath(path), scan)
     except OSError as exc:  # a folder that cannot be created or written, a full disk
@@ -85,6 +87,23 @@ def write(path, scan: Scan) -> None:
         if os.fspath(path) in str(exc):
             raise
         raise ValueError(f"{os.fspath(path)}: {exc}") from None
+
+
+def _warn_of_the_coordinate_system(path: str, suffix: str, scan: Scan) -> None:
+    """A LAS file's coordinate system (its LASF_Projection records) has no field in the other
+    formats: where they keep comment lines it is written as one, else it is not written; either
+    is said, so that a georeferenced survey does not lose its CRS unsaid."""
+    crs = las.coordinate_system(scan.format_info)
+    if crs is None:
+        return
+    name, line = crs
+    if line is not None and suffix in (".ply", ".xyz", ".txt", ".asc", ".obj"):
+        warnings.warn(f"{path}: {suffix} has no field for the LAS coordinate system {name!r}; written as the "
+                      f"comment line {line[:60] + ('...' if len(line) > 60 else '')!r}", stacklevel=3)
+    else:
+        keeps = "; .ply, .xyz and .obj keep it as a comment line" if line is not None else ""
+        warnings.warn(f"{path}: {suffix} has no place for the LAS coordinate system {name!r}; not written{keeps}",
+                      stacklevel=3)
 
 
 def read_ply(path) -> Scan:

@@ -380,5 +380,50 @@ def _vlr(laspy, v: dict):
                      record_data=bytes(v["data"]))
 
 
+_WKT_RECORD, _GEOKEY_RECORDS = 2112, (34735, 34736, 34737)
+_EPSG_KEYS = {3072: "projected", 2048: "geographic", 4096: "vertical"}  # GeoTIFF keys holding an EPSG code
+
+
+def coordinate_system(info: dict) -> tuple[str, str | None] | None:
+    """(a name for it, the line a text or PLY header keeps of it, or None) for the coordinate
+    system of a LAS file's format_info (LASF_Projection VLRs or EVLRs: OGC WKT, record 2112, or
+    GeoTIFF keys, 34735-34737), or None when it has none. The line is "crs: <the WKT on one line>",
+    or "crs: EPSG:<code>" from GeoTIFF keys that give one."""
+    if info.get("format") not in ("las", "laz"):
+        return None
+    records = [v for v in [*info.get("vlrs", []), *info.get("evlrs", [])]
+               if isinstance(v, dict) and v.get("user_id") == "LASF_Projection"]
+    wkt = [v for v in records if v.get("record_id") == _WKT_RECORD]
+    if wkt:
+        text = bytes(wkt[0].get("data", b"")).split(b"\0")[0].decode("utf-8", "replace")
+        text = " ".join(part.strip() for part in text.splitlines() if part.strip())
+        if text:
+            quoted = text.split('"')
+            return (quoted[1] if len(quoted) > 2 and quoted[1] else text[:60]), f"crs: {text}"
+    keys = [v for v in records if v.get("record_id") in _GEOKEY_RECORDS]
+    if not keys:
+        return None
+    codes = _epsg_codes(next((bytes(v.get("data", b"")) for v in keys if v.get("record_id") == 34735), b""))
+    citation = next((bytes(v.get("data", b"")) for v in keys if v.get("record_id") == 34737), b"")
+    citation = citation.replace(b"\0", b"").decode("utf-8", "replace").strip("| ").split("|")[0].strip()
+    epsg = " + ".join(f"EPSG:{c}" for c in codes)
+    name = " ".join(p for p in (citation, f"({epsg})" if citation and epsg else epsg) if p) or "GeoTIFF keys"
+    return name, (f"crs: {epsg}" if epsg else None)
+
+
+def _epsg_codes(directory: bytes) -> list:
+    """The EPSG codes a GeoKeyDirectory (uint16 header and 4-value entries) gives in place:
+    projected, else geographic, and vertical."""
+    values = np.frombuffer(directory[:len(directory) // 2 * 2], dtype="<u2")
+    count = int(values[3]) if len(values) >= 4 else 0
+    entries = values[4:4 + 4 * count]
+    found = {}
+    for key, location, _, value in entries[:len(entries) // 4 * 4].reshape(-1, 4).tolist():
+        if key in _EPSG_KEYS and location == 0 and 0 < value < 32767:
+            found[key] = value
+    horizontal = found.get(3072, found.get(2048))
+    return [c for c in (horizontal, found.get(4096)) if c is not None]
+
+
 def _first_line(exc: Exception) -> str:
     return str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__

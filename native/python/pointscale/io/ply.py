@@ -58,6 +58,9 @@ def write_ply(path, scan: Scan, binary: bool | None = None) -> None:
     comments, obj_info = list(info.get("comments", [])), list(info.get("obj_info", []))
     if scan.format_info.get("format") in ("xyz", "pts", "obj"):  # a text file's comment lines (a CRS, the scanner)
         comments = list(scan.format_info.get("comments", []))
+    elif scan.format_info.get("format") in ("las", "laz"):  # its coordinate system, as a comment
+        from .text import kept_comments
+        comments = kept_comments(scan)
     ply = PlyData([e for e, _, _ in elements], text=text, byte_order=byte_order,
                   comments=[ascii_stand_in(c) for c in comments], obj_info=[ascii_stand_in(c) for c in obj_info])
     with atomic_write(path) as temporary:

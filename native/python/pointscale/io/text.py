@@ -581,8 +581,13 @@ def _format(values: np.ndarray) -> str:
 
 def kept_comments(scan: Scan) -> list:
     """The comment lines a scan was read with that a text or PLY header can hold: an XYZ, PTS or
-    OBJ file's comment lines, a PLY header's comments and obj_info lines (as "obj_info ...")."""
+    OBJ file's comment lines, a PLY header's comments and obj_info lines (as "obj_info ..."), a
+    LAS file's coordinate system ("crs: <WKT on one line>", las.coordinate_system)."""
     info = scan.format_info
+    if info.get("format") in ("las", "laz"):  # its coordinate system, as one line
+        from .las import coordinate_system
+        crs = coordinate_system(info)
+        return [crs[1]] if crs and crs[1] else []
     if info.get("format") not in ("xyz", "ply", "pts", "obj"):
         return []
     lines = list(info.get("comments", [])) + [f"obj_info {c}" for c in info.get("obj_info", [])]
