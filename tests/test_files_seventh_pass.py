@@ -149,3 +149,28 @@ def test_the_crs_reaches_every_level_file_of_decompose_format_ply(tmp_path):
     done = run_cli("reconstruct", str(tmp_path / "out"), "-o", str(tmp_path / "back.e57"))
     if done.returncode == 0:
         assert "no place for the LAS coordinate system 'ETRS89 / UTM zone 32N'" in done.stderr
+
+
+def _ply_with_empty_lists(path, n=400):
+    points = _cloud(n, seed=3) - [500000.0, 5000000.0, 100.0]
+    with open(path, "w") as f:
+        f.write(f"ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\nproperty float y\nproperty float z\n"
+                "property list uchar int tags\nend_header\n")
+        for i, p in enumerate(points):
+            f.write(f"{p[0]:.7g} {p[1]:.7g} {p[2]:.7g} {i % 2}{' 7' if i % 2 else ''}\n")
+    return points
+
+
+def test_an_ascii_ply_vertex_list_that_is_sometimes_empty_says_only_our_words(tmp_path):
+    """NumPy's 'loadtxt: input contained no data' reached the user for every empty list."""
+    points = _ply_with_empty_lists(tmp_path / "tags.ply")
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        scan = io.read(tmp_path / "tags.ply")
+    messages = [str(w.message) for w in said]
+    assert not any("loadtxt" in m for m in messages), messages
+    assert any("vertex property tags has lists of varying length; not kept" in m for m in messages), messages
+    assert np.allclose(scan.points, points, atol=1e-5)
+    done = run_cli("decompose", str(tmp_path / "tags.ply"), "-o", str(tmp_path / "out"), "--levels", "3")
+    assert done.returncode == 0, done.stderr
+    assert "loadtxt" not in done.stderr and "varying length" in done.stderr, done.stderr

@@ -94,10 +94,14 @@ def _parse(path: str):
             # Mixed polygons are read by the general parser (fixed None); a damaged file fails
             # there again, and this time its error is reported.
             try:
-                if text is None:
-                    return PlyData.read(path, known_list_len=fixed or {}), None
-                with HeaderAsAscii(path, text[0]) as stream:
-                    return PlyData.read(stream, known_list_len=fixed or {}), text
+                with warnings.catch_warnings():
+                    # plyfile reads an ASCII list of length 0 with NumPy's loadtxt, which warns of
+                    # "no data": an empty list is valid PLY, and the user needs no NumPy words
+                    warnings.filterwarnings("ignore", message="loadtxt: input contained no data")
+                    if text is None:
+                        return PlyData.read(path, known_list_len=fixed or {}), None
+                    with HeaderAsAscii(path, text[0]) as stream:
+                        return PlyData.read(stream, known_list_len=fixed or {}), text
             except Exception:
                 if fixed is None:
                     raise
