@@ -174,3 +174,63 @@ def test_an_ascii_ply_vertex_list_that_is_sometimes_empty_says_only_our_words(tm
     done = run_cli("decompose", str(tmp_path / "tags.ply"), "-o", str(tmp_path / "out"), "--levels", "3")
     assert done.returncode == 0, done.stderr
     assert "loadtxt" not in done.stderr and "varying length" in done.stderr, done.stderr
+
+
+def _grid_mesh(k=12):
+    u, v = np.meshgrid(np.linspace(0, 1, k), np.linspace(0, 1, k), indexing="ij")
+    points = np.c_[u.ravel(), v.ravel(), 0.1 * np.sin(3 * u.ravel()) * np.cos(2 * v.ravel())]
+    idx = np.arange(k * k).reshape(k, k)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    return points, np.r_[np.c_[a, b, c], np.c_[a, c, d]]
+
+
+def test_an_obj_whose_faces_differ_in_corner_form_is_read_with_the_missing_uvs_filled(tmp_path):
+    """'f v/vt' in one group and 'f v' in another (legal OBJ) was refused: 'face corners mix the
+    forms v, v/vt, v//vn and v/vt/vn'."""
+    points, faces = _grid_mesh()
+    textured = faces[:60]
+    with open(tmp_path / "mixed.obj", "w") as f:
+        for p in points:
+            f.write("v %.17g %.17g %.17g\n" % tuple(p))
+        for p in points:
+            f.write("vt %.17g %.17g\n" % (p[0], p[1]))
+        f.write("g textured\n")
+        for t in textured + 1:
+            f.write("f %d/%d %d/%d %d/%d\n" % (t[0], t[0], t[1], t[1], t[2], t[2]))
+        f.write("g plain\n")
+        for t in faces[60:] + 1:
+            f.write("f %d %d %d\n" % tuple(t))
+    lacking = len(points) - len(np.unique(textured))
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        scan = io.read(tmp_path / "mixed.obj")
+    messages = [str(w.message) for w in said]
+    assert any(f"some faces give UVs and others do not; {lacking} of {len(points)} vertices have none, filled with 0"
+               in m for m in messages), messages
+    assert np.array_equal(scan.faces, faces) and np.array_equal(scan.points, points)
+    has = np.zeros(len(points), bool)
+    has[textured] = True
+    assert np.array_equal(scan.vertex_attributes["texture_u"][has], points[has, 0])
+    assert np.array_equal(scan.vertex_attributes["texture_v"][has], points[has, 1])
+    assert not scan.vertex_attributes["texture_u"][~has].any()
+    done = run_cli("decompose", str(tmp_path / "mixed.obj"), "-o", str(tmp_path / "out"), "--levels", "3")
+    assert done.returncode == 0, done.stderr
+    assert "filled with 0" in done.stderr and "mix the forms" not in done.stderr
+
+
+def test_normals_given_by_some_faces_only_and_a_mix_within_one_face(tmp_path):
+    points, faces = _grid_mesh(6)
+    head = "".join("v %.17g %.17g %.17g\n" % tuple(p) for p in points) + "vn 0 0 1\n"
+    body = "".join("f %d//1 %d//1 %d//1\n" % tuple(t) for t in faces[:4] + 1)
+    body += "".join("f %d %d %d\n" % tuple(t) for t in faces[4:] + 1)
+    (tmp_path / "vn.obj").write_text(head + body)
+    with pytest.warns(UserWarning, match="some faces give normals and others do not"):
+        scan = io.read(tmp_path / "vn.obj")
+    lit = np.unique(faces[:4])
+    assert np.array_equal(scan.normals[lit], np.tile([0.0, 0.0, 1.0], (len(lit), 1)))
+    (tmp_path / "one_face.obj").write_text(head + "f 1//1 2 3\n" + body)
+    with pytest.raises(ValueError, match="a face's corners mix the forms v, v/vt, v//vn and v/vt/vn"):
+        io.read(tmp_path / "one_face.obj")
+    (tmp_path / "bad_index.obj").write_text(head + "f 1//2 2//2 3//2\n" + body)
+    with pytest.raises(ValueError, match="a face refers to normal 2, outside 1..1"):
+        io.read(tmp_path / "bad_index.obj")

@@ -5,7 +5,9 @@ point cloud with a few faces loses points) and returns UVs only when it can load
 
 Vertex order is the file's. OBJ gives normals and UVs per face corner; a Scan keeps them per
 vertex (the points are what Pointscale processes, so vertices are never split): a vertex whose
-corners disagree (a UV seam) keeps its first corner's value, with a warning. Polygons are kept as
+corners disagree (a UV seam) keeps its first corner's value, with a warning. Faces may differ in
+their corners' form (f v/vt in a textured group, f v elsewhere); the vertices no face gives a UV
+(or normal) are then filled with 0, with a warning. The corners of one face share one form. Polygons are kept as
 they are (no triangulation). Negative (relative) indices are resolved against the counts at the
 end of the file, which is exact when all vertices come before the faces, as in nearly every file.
 Groups, objects, materials and lines (l) are not kept (a warning counts them). Read, UVs are
@@ -144,8 +146,9 @@ def _lines(path: str) -> dict:
 
 
 def _faces(face_lines: list, nv: int, nvt: int, nvn: int, path: str, seen: np.ndarray):
-    """(faces, vt index per corner or None, vn index per corner or None), 0-based. seen: per
-    face line, the v, vt and vn lines above it."""
+    """(faces, vt index per corner or None, vn index per corner or None), 0-based; a corner
+    whose face gives no vt (or vn) while others do has -1 there. seen: per face line, the v, vt
+    and vn lines above it."""
     if not face_lines:
         return None, None, None
     lengths = np.array([len(line.split()) for line in face_lines])
@@ -153,20 +156,23 @@ def _faces(face_lines: list, nv: int, nvt: int, nvn: int, path: str, seen: np.nd
     slashes = tokens[0].count("/")
     double = "//" in tokens[0]
     text = " ".join(tokens)
+    present = None  # which of v, vt, vn each corner gives, when faces differ in that
     if text.count("/") != slashes * len(tokens) or text.count("//") != double * len(tokens):
-        raise ValueError(f"{path}: face corners mix the forms v, v/vt, v//vn and v/vt/vn")
-    if double:
-        text = text.replace("//", "/0/")
-    try:
-        refs = np.array(text.replace("/", " ").split(), dtype=np.int64).reshape(len(tokens), -1)
-    except (ValueError, OverflowError):  # OverflowError: an index past 64 bits
-        raise ValueError(f"{path}: a face holds something that is not a vertex index") from None
+        refs, present = _corners_of_mixed_forms(tokens, lengths, path)
+        double = False
+    else:
+        if double:
+            text = text.replace("//", "/0/")
+        try:
+            refs = np.array(text.replace("/", " ").split(), dtype=np.int64).reshape(len(tokens), -1)
+        except (ValueError, OverflowError):  # OverflowError: an index past 64 bits
+            raise ValueError(f"{path}: a face holds something that is not a vertex index") from None
     if (lengths < 3).any():
         raise ValueError(f"{path}: a face has fewer than 3 corners")
     columns = []
     for j, count in enumerate((nv, nvt, nvn)[:refs.shape[1]]):
         column = refs[:, j]
-        if double and j == 1:
+        if double and j == 1 or present is not None and not present[:, j].any():
             columns.append(None)
             continue
         # OBJ indices are 1-based; negative ones count back from the last of its kind defined
@@ -175,6 +181,8 @@ def _faces(face_lines: list, nv: int, nvt: int, nvn: int, path: str, seen: np.nd
         above = np.repeat(seen[:, j], lengths)
         column = np.where(written < 0, written + above, written - 1)
         bad = (column < 0) | (column >= count)
+        if present is not None:
+            bad &= present[:, j]
         if bad.any():  # name the index as the file writes it, the first one out of range
             what = ("vertex", "texture coordinate", "normal")[j]
             at = int(np.argmax(bad))
@@ -184,18 +192,49 @@ def _faces(face_lines: list, nv: int, nvt: int, nvn: int, path: str, seen: np.nd
                     else f"; no {many} stand above the face to count back from")
             allowed = f"outside 1..{count}{back}" if count else f"but the file has no {many}"
             raise ValueError(f"{path}: a face refers to {what} {first}, {allowed}")
+        if present is not None:
+            column = np.where(present[:, j], column, -1)
         columns.append(column)
     columns += [None] * (3 - len(columns))
     return polygons(lengths, columns[0]), columns[1], columns[2]
 
 
+# A corner's form by its slashes: v, v/vt, v/vt/vn, v//vn (two slashes and one more for "//").
+_FORM_PARTS = {0: (True, False, False), 1: (True, True, False), 2: (True, True, True), 3: (True, False, True)}
+
+
+def _corners_of_mixed_forms(tokens: list, lengths: np.ndarray, path: str):
+    """(refs (corners, 3) with 0 where a corner gives no vt or vn, which each gives (corners, 3))
+    of faces whose corner forms differ from face to face (a model textured in some groups only,
+    f v/vt there and f v elsewhere), as OBJ allows. The corners of one face share one form."""
+    forms = np.array([t.count("/") + ("//" in t) for t in tokens])
+    starts = np.cumsum(lengths) - lengths
+    if (forms != np.repeat(forms[starts], lengths)).any():
+        raise ValueError(f"{path}: a face's corners mix the forms v, v/vt, v//vn and v/vt/vn")
+    if (forms > 3).any():
+        raise ValueError(f"{path}: a face holds something that is not a vertex index")
+    present = np.array([_FORM_PARTS[f] for f in forms.tolist()], dtype=bool).reshape(-1, 3)
+    parts = [(t.split("/") + ["", ""])[:3] for t in tokens]
+    try:
+        refs = np.array([int(x) if want else 0 for p, form in zip(parts, present.tolist())
+                         for x, want in zip(p, form)], dtype=np.int64).reshape(-1, 3)
+    except (ValueError, OverflowError):
+        raise ValueError(f"{path}: a face holds something that is not a vertex index") from None
+    return refs, present
+
+
 def _per_vertex(values: np.ndarray, faces, corner: np.ndarray | None, n: int, what: str, path: str):
-    """Per-corner values (vt or vn through the face references) as one per vertex, or None."""
+    """Per-corner values (vt or vn through the face references) as one per vertex, or None.
+    Corners of -1 give none (faces of another form): a vertex only such faces use is filled with
+    0, with a warning counting them."""
     if len(values) == 0:
         return None
     if corner is None:
         return values if len(values) == n else None  # no corner references: by index when counts match
     vertex = faces.ravel() if isinstance(faces, np.ndarray) else np.concatenate(faces)
+    partial = bool((corner < 0).any())
+    if partial:
+        vertex, corner = vertex[corner >= 0], corner[corner >= 0]
     out = np.full((n, values.shape[1]), np.nan)
     first = np.full(n, -1)
     used, earliest = np.unique(vertex, return_index=True)
@@ -206,7 +245,11 @@ def _per_vertex(values: np.ndarray, faces, corner: np.ndarray | None, n: int, wh
     if split:
         warnings.warn(f"{path}: {split} face corners give their vertex different {what} (a seam); "
                       "each vertex keeps its first", stacklevel=4)
-    if not have.all():
+    if partial and not have.all():
+        warnings.warn(f"{path}: some faces give {what} and others do not; {int((~have).sum())} of {n} vertices "
+                      f"have none, filled with 0", stacklevel=4)
+        out[~have] = 0.0
+    elif not have.all():
         if len(values) == n:
             out[~have] = values[~have]
         else:
