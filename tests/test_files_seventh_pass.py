@@ -234,3 +234,44 @@ def test_normals_given_by_some_faces_only_and_a_mix_within_one_face(tmp_path):
     (tmp_path / "bad_index.obj").write_text(head + "f 1//2 2//2 3//2\n" + body)
     with pytest.raises(ValueError, match="a face refers to normal 2, outside 1..1"):
         io.read(tmp_path / "bad_index.obj")
+
+
+def _write_xyz(path, n=2000, seed=5):
+    rng = np.random.default_rng(seed)
+    u, v = rng.uniform(-1, 1, (2, n))
+    points = np.c_[u, v, 0.2 * np.sin(2 * u) * np.cos(3 * v)]
+    np.savetxt(path, points, fmt="%.17g")
+    return points
+
+
+def test_format_lists_only_the_level_formats_and_one_file_is_singular(tmp_path):
+    _write_xyz(tmp_path / "s.xyz")
+    line = one_line_error(run_cli("decompose", str(tmp_path / "s.xyz"), "-o", str(tmp_path / "out"),
+                                  "--format", ".ply.gz"))
+    assert "unknown extension '.gz'; supported: .ply, .las, .laz, .obj, .off, .stl, .xyz, .pts, .e57" in line, line
+    assert ".txt" not in line and ".asc" not in line
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "level_0.xyz").write_text("0 0 0\n")
+    line = one_line_error(run_cli("decompose", str(tmp_path / "s.xyz"), "-o", str(tmp_path / "out")))
+    assert "already holds a decomposition (1 file, e.g. level_0.xyz)" in line, line
+    (tmp_path / "out" / "level_1.xyz").write_text("0 0 0\n")
+    line = one_line_error(run_cli("decompose", str(tmp_path / "s.xyz"), "-o", str(tmp_path / "out")))
+    assert "already holds a decomposition (2 files, e.g. level_0.xyz)" in line, line
+
+
+def test_a_full_disk_names_the_file_being_written(tmp_path, monkeypatch, capsys):
+    """'error: No space left on device' named no file when NumPy's .npz writer hit a full disk."""
+    import errno
+    import pointscale.cli as cli
+    _write_xyz(tmp_path / "s.xyz")
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(np, "savez", full)
+    monkeypatch.setattr(warnings, "showwarning", warnings.showwarning)
+    code = cli.main(["decompose", str(tmp_path / "s.xyz"), "-o", str(tmp_path / "out"), "--levels", "3"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert f"cannot write {tmp_path / 'out' / 'decomposition.npz'}: No space left on device" in err, err
+    assert not (tmp_path / "out").exists()

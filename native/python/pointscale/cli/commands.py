@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import Mirror, decompose, io, reconstruct, shapes
-from .folder import (DECOMPOSITION_FILE, SOURCE_FILE, TEXT_CLOUD_EXTENSIONS, level_extension, level_name,
-                     read_decomposition)
+from .folder import (DECOMPOSITION_FILE, LEVEL_EXTENSIONS, SOURCE_FILE, TEXT_CLOUD_EXTENSIONS, level_extension,
+                     level_name, read_decomposition)
 from .level_files import (FORMATS_WITH_VERTEX_SCALARS, ResultOverflow, finest_normals, level_scan,
                           reconstruct_with_normals)
 from .output_checks import (check_format_holds, check_input_kept, check_output_file, check_output_folder, read_base,
@@ -132,6 +132,8 @@ class _Writers:
                 task()
             except ValueError as exc:
                 raise ValueError(str(exc).replace(str(temporary), str(final))) from None
+            except OSError as exc:  # a full disk while NumPy writes an .npz: its words name no file
+                raise ValueError(f"cannot write {final}: {exc.strerror or exc}") from None
         self._futures.append(self._pool.submit(run))
 
     def wait(self) -> None:
@@ -158,11 +160,11 @@ class _Writers:
 def cmd_decompose(args) -> None:
     out = Path(args.output)
     if args.format:
-        extension = writable_extension("level" + "." * (not args.format.startswith(".")) + args.format, "--format",
-                                       shown=args.format)
-        if extension in TEXT_CLOUD_EXTENSIONS:
-            raise ValueError(f"--format {args.format}: level files are never {extension} (a file of that name beside "
-                             f"them may be anyone's); a text cloud's levels are .xyz, the same columns")
+        named = "level" + "." * (not args.format.startswith(".")) + args.format
+        if Path(named).suffix.lower() in TEXT_CLOUD_EXTENSIONS:
+            raise ValueError(f"--format {args.format}: level files are never {Path(named).suffix.lower()} (a file of "
+                             f"that name beside them may be anyone's); a text cloud's levels are .xyz, the same columns")
+        extension = writable_extension(named, "--format", shown=args.format, supported=LEVEL_EXTENSIONS)
     else:
         extension = level_extension(writable_extension(args.input, "input"))
     check_input_kept(Path(args.input), out)  # first: --force would not help

@@ -12,16 +12,17 @@ from .folder import is_level_file, owned_files
 from .level_files import level_scan
 
 
-def writable_extension(path: Path | str, what: str, shown: str | None = None) -> str:
-    """path's extension, if a supported one; `what` and `shown` (default: path) name it."""
+def writable_extension(path: Path | str, what: str, shown: str | None = None,
+                       supported: tuple = io.SUPPORTED_EXTENSIONS) -> str:
+    """path's extension, if one of `supported`; `what` and `shown` (default: path) name it."""
     extension = Path(path).suffix.lower()
     if what == "input" and not str(path):
         raise ValueError("the input file name is empty")
     if what == "input" and Path(path).is_dir():  # the reader would say so, after this check
         raise ValueError(f"input {path} is a folder, not a file")
-    if extension not in io.SUPPORTED_EXTENSIONS:
+    if extension not in supported:
         raise ValueError(f"{what} {shown if shown is not None else path}: unknown extension {extension or '(none)'!r}; "
-                         f"supported: {', '.join(io.SUPPORTED_EXTENSIONS)}")
+                         f"supported: {', '.join(supported)}")
     return extension
 
 
@@ -55,7 +56,8 @@ def check_output_folder(out: Path, force: bool) -> list[Path]:
     _require_writable_folder(_nearest_existing(out), out)
     earlier = owned_files(out)
     if earlier and not force:
-        raise ValueError(f"{out} already holds a decomposition ({len(earlier)} files, e.g. {earlier[0].name}); "
+        raise ValueError(f"{out} already holds a decomposition ({len(earlier)} file{'s' * (len(earlier) != 1)}, "
+                         f"e.g. {earlier[0].name}); "
                          "pass --force to replace it, or choose another folder")
     return earlier
 
