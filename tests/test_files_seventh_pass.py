@@ -275,3 +275,54 @@ def test_a_full_disk_names_the_file_being_written(tmp_path, monkeypatch, capsys)
     assert code == 2 and len(err.splitlines()) == 1, err
     assert f"cannot write {tmp_path / 'out' / 'decomposition.npz'}: No space left on device" in err, err
     assert not (tmp_path / "out").exists()
+
+
+def _without_source_id(folder):
+    """The folder as a pointscale that wrote no identifier left it."""
+    import json
+    with np.load(folder / "decomposition.npz", allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    settings = json.loads(arrays["settings"].tobytes())
+    del settings["source_id"]
+    arrays["settings"] = np.frombuffer(json.dumps(settings).encode(), dtype=np.uint8)
+    np.savez(folder / "decomposition.npz", **arrays)
+    scan = io.Scan.from_arrays(folder / "source.npz")
+    np.savez(folder / "source.npz", **scan.to_arrays())
+
+
+def test_a_source_npz_of_another_decomposition_is_refused(tmp_path):
+    """source.npz copied from a decomposition of another file with as many points was taken
+    silently: the result had the other file's colours and attributes."""
+    points = _write_xyz(tmp_path / "a.xyz")
+    rng = np.random.default_rng(9)
+    colours = rng.integers(0, 256, (len(points), 3))
+    np.savetxt(tmp_path / "b.xyz", np.c_[points, colours], fmt=["%.17g"] * 3 + ["%d"] * 3,
+               header="x y z red green blue", comments="//")
+    for name in ("a", "b"):
+        done = run_cli("decompose", str(tmp_path / f"{name}.xyz"), "-o", str(tmp_path / name), "--levels", "3")
+        assert done.returncode == 0, done.stderr
+    first = (tmp_path / "a" / "decomposition.npz").read_bytes(), (tmp_path / "a" / "source.npz").read_bytes()
+    done = run_cli("decompose", str(tmp_path / "a.xyz"), "-o", str(tmp_path / "a"), "--levels", "3", "--force")
+    assert done.returncode == 0, done.stderr  # the same input again: the same files, bit for bit
+    assert ((tmp_path / "a" / "decomposition.npz").read_bytes(), (tmp_path / "a" / "source.npz").read_bytes()) == first
+    (tmp_path / "a" / "source.npz").write_bytes((tmp_path / "b" / "source.npz").read_bytes())
+    for command in (["reconstruct", str(tmp_path / "a"), "-o", str(tmp_path / "r.ply")], ["info", str(tmp_path / "a")]):
+        line = one_line_error(run_cli(*command))
+        assert "source.npz and " in line and "come from different decompositions" in line, line
+    assert not (tmp_path / "r.ply").exists()
+
+
+def test_folders_without_a_source_id_still_work_and_do_not_mix_with_new_ones(tmp_path):
+    points = _write_xyz(tmp_path / "a.xyz")
+    done = run_cli("decompose", str(tmp_path / "a.xyz"), "-o", str(tmp_path / "new"), "--levels", "3")
+    assert done.returncode == 0, done.stderr
+    (tmp_path / "old").mkdir()
+    for name in ("decomposition.npz", "source.npz"):
+        (tmp_path / "old" / name).write_bytes((tmp_path / "new" / name).read_bytes())
+    _without_source_id(tmp_path / "old")
+    done = run_cli("reconstruct", str(tmp_path / "old"), "-o", str(tmp_path / "r.xyz"))
+    assert done.returncode == 0, done.stderr
+    assert np.abs(io.read(tmp_path / "r.xyz").points - points).max() < 1e-13  # 1e-14 measured
+    (tmp_path / "new" / "source.npz").write_bytes((tmp_path / "old" / "source.npz").read_bytes())
+    line = one_line_error(run_cli("reconstruct", str(tmp_path / "new"), "-o", str(tmp_path / "r2.xyz")))
+    assert "come from different decompositions (source without an identifier" in line, line

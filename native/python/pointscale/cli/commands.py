@@ -11,7 +11,7 @@ import numpy as np
 
 from .. import Mirror, decompose, io, reconstruct, shapes
 from .folder import (DECOMPOSITION_FILE, LEVEL_EXTENSIONS, SOURCE_FILE, TEXT_CLOUD_EXTENSIONS, level_extension,
-                     level_name, read_decomposition)
+                     level_name, read_decomposition, source_identifier)
 from .level_files import (FORMATS_WITH_VERTEX_SCALARS, ResultOverflow, finest_normals, level_scan,
                           reconstruct_with_normals)
 from .output_checks import (check_format_holds, check_input_kept, check_output_file, check_output_folder, read_base,
@@ -209,11 +209,15 @@ def cmd_decompose(args) -> None:
         with _Writers(progress, "writing", expected=k + 3) as writers:
             model_tmp = staged.temporary(out / DECOMPOSITION_FILE)
             source_tmp = staged.temporary(out / SOURCE_FILE)
-            writers.submit(lambda: np.savez(model_tmp, **dec.to_dict()), model_tmp, out / DECOMPOSITION_FILE)
             # The source keeps the file's normals where the decomposition used them (not where
             # they were all zero or --estimate-normals set them aside).
             source = scan if used_normals is not None else scan.with_geometry(scan.points, None)
-            writers.submit(lambda: np.savez(source_tmp, **source.to_arrays()), source_tmp, out / SOURCE_FILE)
+            # Both files name the same source, so that reconstruct tells a source.npz of another
+            # decomposition (of another input, or other normals) from this one's.
+            source_id = source_identifier(scan.points, source.to_arrays())
+            dec.settings["source_id"] = source_id
+            writers.submit(lambda: np.savez(model_tmp, **dec.to_dict()), model_tmp, out / DECOMPOSITION_FILE)
+            writers.submit(lambda: np.savez(source_tmp, **source.to_arrays(source_id)), source_tmp, out / SOURCE_FILE)
             level_files = [out / level_name(l, extension) for l in range(k + 1)]
             level_tmp = [staged.temporary(f) for f in level_files]
             for l in range(k):

@@ -2,7 +2,9 @@
 
     decomposition.npz   the model (pointscale.load reads it)
     source.npz          the input's faces, every vertex and face attribute and what its format
-                        needs to be written back (pointscale.io.Scan.to_arrays), no pickles
+                        needs to be written back (pointscale.io.Scan.to_arrays), no pickles;
+                        both .npz files hold the same source_id (source_identifier), and a
+                        source.npz of another decomposition is refused
     level_0.EXT ..      every level as a file in the input's format (or --format), with the
     level_k.EXT         level's own normals and the input's attributes
 
@@ -10,10 +12,15 @@ Both .npz files are read with allow_pickle=False and checked before use.
 """
 from __future__ import annotations
 
+import hashlib
+import json
 import re
 from pathlib import Path
 
+import numpy as np
+
 from .. import io
+from ..io.scan import stored_source_id
 from ..multiscale import load
 
 DECOMPOSITION_FILE = "decomposition.npz"
@@ -58,7 +65,20 @@ def model_file(path: Path) -> Path:
     return path / DECOMPOSITION_FILE if path.is_dir() else path
 
 
-def read_source(path: Path, n_points: int | None = None):
+def source_identifier(points: np.ndarray, arrays: dict) -> str:
+    """The identifier decompose writes into both decomposition.npz (settings["source_id"]) and
+    source.npz: a digest of the input's points and of source.npz's arrays, so that a source.npz
+    of another input (or of the same points with other attributes or normals) is told apart,
+    while a run again on the same input writes the same files, bit for bit."""
+    digest = hashlib.sha256()
+    for name, values in [("points", np.asarray(points)), *sorted(arrays.items())]:
+        values = np.ascontiguousarray(values)
+        digest.update(f"{name}:{values.dtype.str}:{values.shape};".encode())
+        digest.update(values.tobytes())
+    return digest.hexdigest()[:32]
+
+
+def read_source(path: Path, n_points: int | None = None, source_id: str | None = None):
     """The input's attributes saved beside a decomposition, or None for a folder without them.
     n_points, the decomposition's own point count, sizes what source.npz may unpack: the count
     source.npz declares is the file's word about itself, and a crafted one would let it unpack
@@ -70,11 +90,17 @@ def read_source(path: Path, n_points: int | None = None):
                          "input's attributes and faces")
     if source.is_file():
         try:
-            return io.Scan.from_arrays(source, n_points=n_points)
+            scan = io.Scan.from_arrays(source, n_points=n_points)
+            stored = stored_source_id(source)
         except ValueError:
             raise
         except Exception as exc:  # zip and header errors of a damaged or crafted file
             raise ValueError(f"cannot read {source}: {_one_line(exc)}") from None
+        if stored != source_id:  # both None: a folder of a pointscale that wrote no identifier
+            raise ValueError(f"{source} and {model_file(path)} come from different decompositions (source "
+                             f"{stored or 'without an identifier'}, decomposition {source_id or 'without one'}): "
+                             "put back the source.npz written with it, or decompose the input again")
+        return scan
     if (folder / "faces.npy").is_file():
         raise ValueError(f"{folder / 'faces.npy'} is an older pointscale's face file, which needs loading Python "
                          "objects (a pickle) and is not read; decompose the input again")
@@ -87,7 +113,10 @@ def read_decomposition(path: Path):
     if not file.is_file():
         raise ValueError(f"no decomposition at {path} (expected a folder holding {DECOMPOSITION_FILE}, or the file)")
     dec = load(file)
-    source = read_source(path, dec.n_points)
+    source_id = dec.settings.get("source_id")
+    if source_id is not None and not isinstance(source_id, str):
+        raise ValueError(f"{file}: settings['source_id'] must be text, got {json.dumps(source_id)[:40]}")
+    source = read_source(path, dec.n_points, source_id)
     if source is not None and source.n_points != dec.n_points:
         raise ValueError(f"{file.parent / SOURCE_FILE} describes {source.n_points} points, "
                          f"the decomposition {dec.n_points}: the folder mixes two runs")

@@ -87,15 +87,18 @@ class Scan:
 
     # -- flat-array form, for np.savez / np.load(allow_pickle=False) ------------------------------
 
-    def to_arrays(self) -> dict:
+    def to_arrays(self, source_id: str | None = None) -> dict:
         """Everything but the points as name -> plain numpy array (numeric, or uint8 for JSON
         text and raw bytes; never an object array), for `np.savez(file, **scan.to_arrays())`.
         The normals, where the scan has them, are kept too: they are the input's own, which no
-        computed normals replace."""
+        computed normals replace. source_id, when given, is kept in the meta text (the command
+        line's source.npz names the decomposition it belongs to; read with stored_source_id)."""
         blobs: list[bytes] = []
         meta = {"n_points": self.n_points, "precision": self.precision.str,
                 "format_info": _bytes_to_refs(self.format_info, blobs),
                 "vertex_attributes": list(self.vertex_attributes), "face_attributes": list(self.face_attributes)}
+        if source_id is not None:
+            meta["source_id"] = str(source_id)
         try:
             text = json.dumps(meta)
         except (TypeError, ValueError) as exc:
@@ -337,6 +340,17 @@ def _face_entry(arrays: dict, key: str):
             or offsets[0] != 0 or offsets[-1] != len(values) or np.any(np.diff(offsets) < 0):
         raise ValueError(f"scan arrays: {key} and its offsets do not describe lists")
     return np.split(values, offsets[1:-1]) if len(offsets) > 1 else []
+
+
+def stored_source_id(path) -> str | None:
+    """The source_id that to_arrays kept in the .npz file at path, or None (none kept). Call it
+    after Scan.from_arrays(path, n_points=...) has checked the file and its sizes."""
+    with np.load(path, allow_pickle=False) as loaded:
+        meta = json.loads(_as_bytes(_plain(loaded, _META_KEY), _META_KEY).decode("utf-8"))
+    value = meta.get("source_id") if isinstance(meta, dict) else None
+    if value is not None and not (isinstance(value, str) and value.isprintable() and len(value) <= 64):
+        raise ValueError(f"{os.fspath(path)}: damaged {_META_KEY} (source_id {str(value)[:40]!r})")
+    return value
 
 
 def _as_bytes(value: np.ndarray, key: str) -> bytes:
