@@ -13,6 +13,7 @@
 #include "pointscale/detail/thin_sheets.h"
 #include "pointscale/detail/build_level_support.h"
 #include "pointscale/detail/cluster_layout.h"
+#include "pointscale/detail/coincident_points.h"
 #include "pointscale/detail/level_orientation.h"
 #include "pointscale/detail/level_turns.h"
 #include "pointscale/detail/make_offsets_normal.h"
@@ -209,6 +210,9 @@ MultiscaleModel decompose_levels(Points points, const Points* input_normals, Poi
   sheets.input_normals = input_normals;
   sheets.owned = owned;
 
+  // Input points that coincide, in the numbering from the first decimation on: each level's
+  // projection gives them one place (coincident_points.h).
+  std::vector<std::pair<Index, Index>> copies;
   for (int step = 0; step < k; ++step) {
     const int l = k - step;  // builds level l-1 from level l
     const ProgressStage stage = all.sub(static_cast<double>(step) / (k + 0.2), static_cast<double>(step + 1) / (k + 0.2));
@@ -216,8 +220,10 @@ MultiscaleModel decompose_levels(Points points, const Points* input_normals, Poi
     // |Q^{l-1}| = gamma^(step+1) n (Sec. 5.2).
     const auto target = static_cast<std::size_t>(std::floor(std::pow(options.decimation, step + 1) * n));
     Decimation decimated = decimate_level(fine, target, options, step == 0, original, sheets);
+    if (step == 0) copies = coincident_points(fine, decimated.groups, sheets.on ? &sheets.sides : nullptr);
     stage.report(0.05);
     Projection projection = project_level(fine, decimated, options, sheets, stage.sub(0.1, 0.8));
+    unify_coincident(copies, projection.projected.positions, projection.projected.normals);
     LevelSupport& support = model.support[l - 1];
     Points anchor_reference = build_support(fine, projection, decimated, original, options, sheets.on, support);
     Points coarse = std::move(projection.projected.positions);
@@ -225,6 +231,7 @@ MultiscaleModel decompose_levels(Points points, const Points* input_normals, Poi
     const Consistency consistency = make_offsets_normal(fine, coarse, support, decimated.groups, anchor_reference, scale,
                                                         options.consistency_iterations, stage.sub(0.8, 1.0),
                                                         model.details.row(l - 1), normals);
+    unify_coincident(copies, support.anchors, coarse, normals, model.details.row(l - 1));
     decimated.groups = LabelGroups();
     turns.add(l, coarse, std::move(normals), model.support, original, step == 0 ? &anchor_reference : nullptr);
     fine = std::move(coarse);

@@ -249,7 +249,20 @@ bool ring_on_a_line(const FoldReference& ref, std::uint16_t skip, Index s) {
   return !(half - gap > on_a_line_spread * (half + gap));
 }
 
-// The same, with the edges that fold as bits (bit 0 for the plane): what the input exempts.
+// An input edge within this sine of a right angle to its base edge has no order along it to keep
+// either: the wall of a box handle stands at right angles to its base, and the edge from a top
+// corner to the wall point below it turned from +0.3 to -0.9 degrees past the right angle under
+// a bump of the base 0.5% of the model high, a fold nobody could see.
+constexpr double right_angle_margin = 0.05;  // sin(2.9 degrees)
+
+// a . b within right_angle_margin |a| |b| of zero, without the square roots.
+inline bool at_right_angle(const Vec3& a, const Vec3& b) {
+  const double d = a.dot(b);
+  return d * d <= right_angle_margin * right_angle_margin * a.squaredNorm() * b.squaredNorm();
+}
+
+// The same, with the edges that fold as bits (bit 0 for the plane): what the input exempts. An
+// edge the input holds at right angles to the base is exempt too (right_angle_margin).
 std::uint16_t folding_bits(const FoldReference& ref, std::uint16_t skip, const SlotRows& r, Index s) {
   const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
   std::uint16_t bits = fold_kind(ref, skip, 0, nullptr, r, s) & fold_turned ? 1u : 0u;
@@ -258,7 +271,7 @@ std::uint16_t folding_bits(const FoldReference& ref, std::uint16_t skip, const S
     if ((skip >> m) & 1u) continue;
     const Vec3 d0 = ref.base.row(ring[m]).transpose() - bi;
     const Vec3 dr = r(ring[m]) - ri;
-    if (reversed(dr, d0)) bits |= static_cast<std::uint16_t>(1u << m);
+    if (reversed(dr, d0) || at_right_angle(dr, d0)) bits |= static_cast<std::uint16_t>(1u << m);
   }
   return bits;
 }
