@@ -103,7 +103,7 @@ def test_another_level_given_as_base_is_refused(tmp_path):
     for level in (1, 2):
         msg = one_line_error(run("reconstruct", str(folder), "--base", str(folder / f"level_{level}.ply"), "-o",
                                  str(tmp_path / "r.ply")))
-        assert f"holds level {level}" in msg and "level_0" in msg
+        assert f"lies where level {level}" in msg and "level_0" in msg and "another decomposition" in msg
         assert not (tmp_path / "r.ply").exists()
     # Level 0 itself, and level 0 edited everywhere (moved off every level), are taken.
     level0 = io.read(folder / "level_0.ply")

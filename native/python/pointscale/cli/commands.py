@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import Mirror, decompose, io, reconstruct, shapes
-from .folder import (DECOMPOSITION_FILE, LEVEL_EXTENSIONS, SOURCE_FILE, TEXT_CLOUD_EXTENSIONS, level_extension,
-                     level_name, read_decomposition, source_identifier)
+from .folder import (DECOMPOSITION_FILE, LEVEL_EXTENSIONS, SOURCE_FILE, TEXT_CLOUD_EXTENSIONS, folder_signature,
+                     level_extension, level_name, read_decomposition, source_identifier)
 from .level_files import (FORMATS_WITH_VERTEX_SCALARS, ResultOverflow, finest_normals, level_scan,
                           reconstruct_with_normals)
 from .output_checks import (check_format_holds, check_input_kept, check_output_file, check_output_folder, read_base,
@@ -169,6 +169,7 @@ def cmd_decompose(args) -> None:
         extension = level_extension(writable_extension(args.input, "input"))
     check_input_kept(Path(args.input), out)  # first: --force would not help
     earlier = check_output_folder(out, args.force)
+    signature = folder_signature(out)
     stages = {"reading": 1.0, "decomposing": 5.0, "levels": 0.6, "writing": 1.6}
     with CommandProgress(stages) as progress, StagedOutput() as staged:
         progress.stage("reading")
@@ -232,6 +233,9 @@ def cmd_decompose(args) -> None:
                            level_tmp[k], level_files[k])
             writers.wait()
         written = {out / DECOMPOSITION_FILE, out / SOURCE_FILE, *level_files}
+        if folder_signature(out) != signature:
+            raise ValueError(f"another command wrote a decomposition into {out} while this one ran; this run's files "
+                             "were not put in place (run it again to replace that one, with --force)")
         staged.commit(remove_after=[p for p in earlier if p not in written])
     print(f"decomposed {args.input} in {elapsed:.2f} s")
     print(describe(dec, scan))

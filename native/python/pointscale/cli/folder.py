@@ -56,6 +56,21 @@ def owned_files(folder: Path) -> list[Path]:
     return sorted(names)
 
 
+def folder_signature(folder: Path) -> dict:
+    """The files of a decomposition in `folder` (owned_files) as they are now: name -> (inode,
+    modification time, size). decompose takes one before it starts and compares before it puts
+    its files in place: another decompose into the same folder that finished in between would
+    otherwise leave one run's model beside the other's level files, both saying they wrote them."""
+    out = {}
+    for path in owned_files(folder):
+        try:
+            st = path.stat()
+        except OSError:
+            continue
+        out[path.name] = (st.st_ino, st.st_mtime_ns, st.st_size)
+    return out
+
+
 def is_level_file(name: str) -> bool:
     match = _LEVEL_FILE.match(name)
     return match is not None and match.group(2) in LEVEL_EXTENSIONS

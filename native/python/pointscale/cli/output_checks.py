@@ -198,8 +198,10 @@ def _refuse_other_level(path: str, base, stored: np.ndarray, dec, source, resolu
         else:
             level = reconstruct(dec, np.r_[np.ones(l), np.zeros(finest - l)])
         if within_resolution(base.points, level, tolerance).mean() > OTHER_LEVEL_SHARE:
-            raise ValueError(f"--base {path} holds level {l}{' (the finest)' if l == finest else ''}, not level 0: "
-                             f"its detail would be added again. Give the (edited) level_0 file as --base")
+            raise ValueError(f"--base {path} lies where level {l}{' (the finest)' if l == finest else ''} of this "
+                             f"decomposition lies, not level 0: its detail would be added again. Give this "
+                             f"decomposition's (edited) level_0 file as --base (a level_0 of another decomposition of "
+                             f"the same input, with other levels or settings, is not this one's)")
 
 
 #: Rounding of a single-precision base, as a share of the model's size, beyond which it is said:
