@@ -87,6 +87,55 @@ def remove_created_basis(obj) -> bool | None:
     return True
 
 
+def removed_basis(mesh, k: int) -> str | None:
+    """The name of the add-on's key that became the reference key when the artist removed the
+    Basis key (Blender makes the next key the reference), or None. Every other key then moves
+    from it, and a Decompose would read it as the shape to decompose."""
+    if k < 1 or mesh.shape_keys is None or mesh.shape_keys.reference_key is None:
+        return None
+    reference = mesh.shape_keys.reference_key.name
+    names = {level_name(l) for l in range(k)} | {band_name(l) for l in range(k)} | set(RESULTS)
+    return reference if reference in names else None
+
+
+def basis_from_layout(mesh, k: int) -> tuple:
+    """(the original positions, None) back from the finest Level and Band keys
+    (logic.basis_from_keys), or (None, why not): a key that holds it removed or edited."""
+    top, finest = level_name(k - 1), band_name(k - 1)
+    kbs = key_blocks(mesh)
+    if kbs is None or top not in kbs or finest not in kbs:
+        return None, f"the keys '{top}' and '{finest}' that hold the original shape are gone"
+    level, band = mesh_io.read_key(kbs[top]), mesh_io.read_key(kbs[finest])
+    written = mesh.get(WRITTEN_LAYOUT) or {}  # checksums of the keys as Decompose wrote them
+    edited = [name for name, co in ((top, level), (finest, band)) if name in written and _checksum(co) != written[name]]
+    if k == 1 and WRITTEN_BASE in mesh.keys() and _fingerprint(level) != mesh[WRITTEN_BASE]:
+        edited.insert(0, top)  # Level 0 has a fingerprint of its own
+    if edited:
+        return None, f"'{edited[0]}', which holds the original shape, was edited since Decompose"
+    return logic.basis_from_keys(level, band), None
+
+
+def restore_basis(obj, k: int) -> str | None:
+    """Makes the reference key a Basis again after the artist removed theirs: the add-on's key
+    that took its place is renamed 'Basis' and given the original positions, which the mesh then
+    shows; every other key moves from it again. Returns why it cannot (and changes nothing)."""
+    mesh = obj.data
+    reference = removed_basis(mesh, k)
+    if reference is None:
+        return None
+    co, problem = basis_from_layout(mesh, k)
+    if problem:
+        return problem
+    kb = mesh.shape_keys.reference_key
+    mesh_io.write_key(kb, co)
+    kb.name = "Basis"
+    kb.value = 0.0
+    if OWNED in mesh.keys():
+        mesh[OWNED] = [name for name in mesh[OWNED] if name != reference]
+    mesh_io.write_vertices(mesh, co)
+    return None
+
+
 def owned(mesh, old_k: int) -> set:
     """Key names this add-on created on ``mesh``. Decompositions made before the list was kept
     own the standard names of their ``old_k`` bands."""

@@ -20,6 +20,7 @@ import numpy as np
 __all__ = [
     "level_key_values",
     "band_key_data",
+    "basis_from_keys",
     "evaluate_keys",
     "per_point_gains",
     "combined_gains",
@@ -66,6 +67,15 @@ def band_key_data(basis: np.ndarray, levels: np.ndarray) -> np.ndarray:
     levels = np.asarray(levels, dtype=np.float64)
     upper = np.concatenate([levels[1:], basis[None]], axis=0)
     return basis[None] + (upper - levels)
+
+
+def basis_from_keys(level: np.ndarray, band: np.ndarray) -> np.ndarray:
+    """The Basis (P^k) back from the finest ``Level k-1`` and ``Band k-1`` keys, as band_key_data
+    wrote them: Band k-1 = Basis + (P^k - P^{k-1}) = 2 Basis - Level k-1. Within float32 rounding
+    (about 1e-7 of the coordinates; the keys keep no more), float32 like a key."""
+    level = np.asarray(level, dtype=np.float64)
+    band = np.asarray(band, dtype=np.float64)
+    return ((band + level) / 2).astype(np.float32)
 
 
 def evaluate_keys(basis, keys, values, weights=None) -> np.ndarray:

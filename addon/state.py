@@ -73,14 +73,25 @@ def decomposed_problem(obj) -> str | None:
     k = mesh.multiscale.n_bands
     kbs = mesh.shape_keys.key_blocks
     names = [keys.level_name(l) for l in range(k)] + [keys.band_name(l) for l in range(k)]
-    reference = mesh.shape_keys.reference_key.name
-    if reference in names or reference in keys.RESULTS:  # the first key is what the others move
-        return (f"the Basis key of '{obj.name}' was removed: '{reference}' is now the reference key, which "
-                "every other key moves from. Undo the removal, or Decompose again")
+    problem = removed_basis_problem(obj)
+    if problem:
+        return problem
     for name in names:
         if name not in kbs:
             return f"'{obj.name}' has no shape key '{name}' any more (removed or renamed): Decompose again"
     return None
+
+
+def removed_basis_problem(obj) -> str | None:
+    """The Basis key removed by hand: one of the add-on's keys is the reference key (the first,
+    which every other key moves from, and the shape a Decompose reads), so nothing may write
+    over it or read it as the original."""
+    mesh = obj.data
+    reference = keys.removed_basis(mesh, mesh.multiscale.n_bands) if storage.has_data(mesh) else None
+    if reference is None:
+        return None
+    return (f"the Basis key of '{obj.name}' was removed: '{reference}' is now the reference key, which every other "
+            "key moves from. Undo the removal (Ctrl+Z), or Clear to get the original shape back without the keys")
 
 
 def vertex_order_problem(obj) -> str | None:

@@ -213,3 +213,16 @@ def test_decompose_relays_the_rays_that_missed():
     said = [m for m in layout.warnings if "rays found no surface" in m]
     assert len(said) == 1 and "settings[" not in said[0] and "Projection encoding" in said[0], layout.warnings
     assert not any("rays" in m for m in compute.decompose(ps, noisy, levels=4).warnings)
+
+
+def test_basis_from_keys_gives_the_original_back_within_float32_rounding(logic):
+    # After the Basis key is removed by hand, Clear puts the original back from the finest
+    # Level and Band keys (float32 as Blender keeps them).
+    rng = np.random.default_rng(3)
+    basis = (rng.standard_normal((500, 3)) * 2).astype(np.float32)
+    levels = np.stack([basis * 0.9, basis * 0.97]).astype(np.float64) + 0.01 * rng.standard_normal((2, 500, 3))
+    bands = logic.band_key_data(basis, levels).astype(np.float32)
+    got = logic.basis_from_keys(levels[-1].astype(np.float32), bands[-1])
+    assert got.dtype == np.float32
+    assert np.abs(got - basis).max() < 4e-7 * np.abs(basis).max()
+    assert np.abs(levels[-1].astype(np.float32) - basis).max() > 0.01  # the level alone is not it

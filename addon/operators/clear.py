@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import bpy
 
-from .. import state, storage, writeback
+from .. import keys, state, storage, writeback
 from ._common import set_mode
 
 
@@ -39,6 +39,17 @@ class POINTSCALE_OT_clear(bpy.types.Operator):
         if problem:
             self.report({"ERROR"}, f"Clear: {problem}")
             return {"CANCELLED"}
+        # The Basis key removed by hand: the mesh shows a level, but the finest keys still hold
+        # the original shape, which a Basis gets back before the keys go.
+        restored = keys.removed_basis(obj.data, obj.data.multiscale.n_bands)
+        problem = keys.restore_basis(obj, obj.data.multiscale.n_bands)
+        if problem:
+            self.report({"ERROR"}, f"Clear: the Basis key of '{obj.name}' was removed, and {problem}: undo the "
+                                   "removal (Ctrl+Z); nothing was modified")
+            return {"CANCELLED"}
+        if restored:
+            self.report({"INFO"}, f"Clear '{obj.name}': the Basis key had been removed; put the original shape back "
+                                  f"from the Level and Band keys (it was on '{restored}')")
         for note in writeback.clear(obj):
             self.report({"INFO"}, f"Clear '{obj.name}': {note}")
         return {"FINISHED"}

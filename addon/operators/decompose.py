@@ -21,7 +21,7 @@ def _problem(context):
     obj = context.active_object
     problem = state.mesh_object_problem(obj) or state.engine_problem()
     if problem is None:
-        problem = state.running_problem(obj)
+        problem = state.running_problem(obj) or state.removed_basis_problem(obj)
     return problem
 
 
