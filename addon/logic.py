@@ -36,6 +36,8 @@ __all__ = [
     "parts_message",
     "engine_message",
     "sheets_message",
+    "faces_wound_against_neighbours",
+    "winding_message",
     "morph_message",
 ]
 
@@ -443,6 +445,35 @@ def sheets_message(message: str) -> str:
     needed = " and ".join(_panel_setting(keyword, value) for keyword, value in SHEETS_METHODS.items())
     return (f"Keep Thin Sheets Apart works with {needed} only; {' and '.join(other) or 'these settings'} would blend "
             "the two sides of a wall. Switch to them, or turn Keep Thin Sheets Apart off")
+
+
+def faces_wound_against_neighbours(loops, starts, totals) -> int:
+    """How many faces are wound against a neighbour: they run along a shared edge in the same
+    direction as the face on its other side (consistently wound faces run it both ways). A patch
+    of flipped faces counts the faces along its border. loops: each loop's vertex; starts,
+    totals: each face's first loop and loop count (Blender's polygons)."""
+    loops = np.asarray(loops, dtype=np.int64)
+    starts = np.asarray(starts, dtype=np.int64)
+    totals = np.asarray(totals, dtype=np.int64)
+    if not len(starts):
+        return 0
+    face = np.repeat(np.arange(len(starts)), totals)
+    position = np.arange(len(face)) - starts[face]
+    following = loops[starts[face] + (position + 1) % totals[face]]
+    keep = loops != following
+    face, edges = face[keep], loops[keep] * (int(loops.max()) + 1) + following[keep]
+    _, inverse, counts = np.unique(edges, return_inverse=True, return_counts=True)
+    return int(np.unique(face[counts[inverse.reshape(-1)] > 1]).size)
+
+
+def winding_message(count: int, total: int) -> str | None:
+    """The warning for Keep Thin Sheets Apart over faces wound against their neighbours, whose
+    vertex normals point the wrong way there: it tells a sheet's sides by them, and the base tears."""
+    if count <= 0:
+        return None
+    return (f"{count} of {total} faces are wound against a neighbouring face (flipped faces): Keep Thin Sheets Apart "
+            "tells a sheet's sides by the normals, so the base may tear there. In Edit Mode select all, use "
+            "Mesh > Normals > Recalculate Outside, and Decompose again")
 
 
 MORPH_TOO_FEW = re.compile(r"^(points_a|points_b|base_points) has (\d+) points; at least (\d+) are needed")

@@ -24,6 +24,17 @@ def read_edges(mesh) -> np.ndarray:
     return e.reshape(-1, 2)
 
 
+def read_faces(mesh) -> tuple:
+    """(loop vertex indices, each face's first loop, each face's loop count): the faces' windings."""
+    loops = np.empty(len(mesh.loops), dtype=np.int32)
+    mesh.loops.foreach_get("vertex_index", loops)
+    starts = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("loop_start", starts)
+    totals = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("loop_total", totals)
+    return loops, starts, totals
+
+
 def read_vertex_normals(mesh) -> np.ndarray | None:
     """(n, 3) Blender's vertex normals, outward where the faces are wound consistently; None for
     a mesh without faces, whose vertex normals say nothing."""

@@ -226,3 +226,24 @@ def test_basis_from_keys_gives_the_original_back_within_float32_rounding(logic):
     assert got.dtype == np.float32
     assert np.abs(got - basis).max() < 4e-7 * np.abs(basis).max()
     assert np.abs(levels[-1].astype(np.float32) - basis).max() > 0.01  # the level alone is not it
+
+
+def test_faces_wound_against_neighbours(logic):
+    # A 4x4 grid of quads wound alike, then with a 2x2 patch flipped (an import defect that
+    # tears Keep Thin Sheets Apart's base): the faces along the patch's border are counted.
+    n = 5
+    quads = [[j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i] for j in range(4) for i in range(4)]
+
+    def count(faces):
+        return logic.faces_wound_against_neighbours(np.concatenate(faces), np.arange(0, 4 * len(faces), 4),
+                                                    np.full(len(faces), 4))
+
+    assert count(quads) == 0
+    flipped = [q[::-1] if (i % 4) in (1, 2) and (i // 4) in (1, 2) else q for i, q in enumerate(quads)]
+    assert count(flipped) == 4 + 8  # the patch, and the 8 faces sharing an edge with it
+    assert logic.faces_wound_against_neighbours([0, 1, 2, 2, 1, 3], [0, 3], [3, 3]) == 0
+    assert logic.faces_wound_against_neighbours([0, 1, 2, 1, 2, 3], [0, 3], [3, 3]) == 2
+    assert logic.faces_wound_against_neighbours([], [], []) == 0
+    assert logic.winding_message(0, 10) is None
+    message = logic.winding_message(12, 16)
+    assert "12 of 16 faces" in message and "Mesh > Normals > Recalculate Outside" in message

@@ -139,6 +139,9 @@ def _prepare(op, context):
                                  "estimate the normals")
         if normals is None and s.thin_sheets:
             normals = mesh_io.read_vertex_normals(mesh)
+            if normals is not None:  # the faces' normals tell the sides: they must agree
+                op._input_notes.append(compute.logic.winding_message(
+                    compute.logic.faces_wound_against_neighbours(*mesh_io.read_faces(mesh)), len(mesh.polygons)))
         if normals is not None:
             kwargs["normals"] = normals
         if s.thin_sheets:

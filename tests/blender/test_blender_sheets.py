@@ -55,3 +55,40 @@ def test_sheets_need_faces_or_estimate_normals():
         level0 = h.key(obj.data, "Level 0").astype(np.float64)
         rms.append(np.sqrt(np.mean(np.sum((level0 - cloud) ** 2, axis=1))))
     assert abs(rms[0] / rms[1] - 1.0) < 0.05, rms  # measured 0.2% apart
+
+
+def _wavy_sphere(flip):
+    import bmesh
+
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32)
+    obj = bpy.context.active_object
+    me = obj.data
+    co = h.vertices(me)
+    d = 1 + 0.05 * np.sin(6 * co[:, 0]) * np.sin(5 * co[:, 1])
+    me.vertices.foreach_set("co", (co * d[:, None]).astype(np.float32).ravel())
+    if flip:
+        bm = bmesh.new()
+        bm.from_mesh(me)
+        bmesh.ops.reverse_faces(bm, faces=[f for f in bm.faces if f.calc_center_median().x > 0.2])
+        bm.to_mesh(me)
+        bm.free()
+    me.update()
+    me.multiscale.thin_sheets = True
+    return obj
+
+
+def test_flipped_faces_are_told_with_thin_sheets(capfd):
+    # A patch of faces wound against the rest (an import defect) turns its vertex normals, by
+    # which Keep Thin Sheets Apart tells the sides, and Level 0 tore there without a word.
+    obj = _wavy_sphere(flip=False)
+    capfd.readouterr()
+    assert bpy.ops.pointscale.decompose() == {"FINISHED"}
+    assert "wound against" not in capfd.readouterr().out
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    obj = _wavy_sphere(flip=True)
+    assert bpy.ops.pointscale.decompose() == {"FINISHED"}
+    out = capfd.readouterr().out
+    import re
+    told = re.search(r"(\d+) of (\d+) faces are wound against a neighbouring face", out)
+    assert told and 100 < int(told.group(1)) < 400 and int(told.group(2)) == len(obj.data.polygons)
+    assert "Mesh > Normals > Recalculate Outside" in out
