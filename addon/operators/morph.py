@@ -19,6 +19,37 @@ def _world_points(obj, into):
     return co @ m[:3, :3].T + m[:3, 3]
 
 
+def _shown_points(context, obj, into):
+    """The vertices of ``obj`` as the viewport shows it (its shape keys and modifiers applied: a
+    half under a Mirror modifier is read whole, a key at 1 with its shape), in the local space of
+    ``into``, and what of it differs from its Basis (for the report)."""
+    if obj.mode == "EDIT":
+        obj.update_from_editmode()
+    evaluated = obj.evaluated_get(context.evaluated_depsgraph_get())
+    mesh = evaluated.to_mesh()
+    try:
+        co = mesh_io.read_vertices(mesh).astype(np.float64)
+    finally:
+        evaluated.to_mesh_clear()
+    m = np.array(into.matrix_world.inverted() @ obj.matrix_world)
+    return co @ m[:3, :3].T + m[:3, 3], _shown_changes(obj)
+
+
+def _shown_changes(obj) -> list:
+    """What the viewport shows of ``obj`` other than its Basis: its shape keys in play and its
+    modifiers, named for the report."""
+    out = []
+    kbs = keys.key_blocks(obj.data)
+    if kbs is not None:
+        reference = obj.data.shape_keys.reference_key
+        if obj.show_only_shape_key:  # Shape Key Lock: the active key alone, at full
+            playing = [obj.active_shape_key] if obj.active_shape_key not in (None, reference) else []
+        else:
+            playing = [kb for kb in kbs if kb != reference and not kb.mute and kb.value != 0.0]
+        out += [f"shape key '{kb.name}'" for kb in playing]
+    return out + [f"modifier '{modifier.name}'" for modifier in obj.modifiers if modifier.show_viewport]
+
+
 def _mirror_seams(obj, points) -> list:
     """[(axis, plane coordinate, vertices on the plane)] of ``obj``'s Mirror modifiers, as
     Decompose reads them, in its own coordinates: the morph object keeps A's modifiers, and a
@@ -193,7 +224,11 @@ class POINTSCALE_OT_morph(RunsInBackground, bpy.types.Operator):
         self._a_uid, self._b_uid = a_obj.session_uid, b_obj.session_uid  # names can change during the job
         a = mesh_io.read_basis(a_obj.data).astype(np.float64)
         self._seams = _mirror_seams(a_obj, a)
-        b = _world_points(b_obj, a_obj)
+        b, self._b_shown = _shown_points(context, b_obj, a_obj)  # B as the artist sees it
+        if len(b) < 4:
+            self.report({"ERROR"}, f"Morph: the target '{b_obj.name}' shows {len(b)} vertices (after its modifiers): "
+                                   "nothing to morph towards")
+            return None
         base = _world_points(s.morph_base_object, a_obj) if s.morph_base == "OBJECT" else None
         return a, b, base, (s.morph_samples, s.morph_align)
 
@@ -260,6 +295,9 @@ class POINTSCALE_OT_morph(RunsInBackground, bpy.types.Operator):
             self.report({"WARNING"}, f"Morph: A's own shape keys are not carried to '{obj.name}': "
                                      f"{', '.join(repr(name) for name in dropped)} (the morph is made from A's Basis "
                                      f"and has the keys 'A detail' and 'B detail' only; '{a_obj.name}' keeps them)")
+        b_shown = getattr(self, "_b_shown", ())
+        if b_shown:
+            self.report({"INFO"}, f"Morph: the target '{b_obj.name}' is read as shown, with its {', '.join(b_shown)}")
         self.report({"INFO"}, f"Morph '{obj.name}': set 'A detail' (alpha) and 'B detail' (beta) to blend")
         return {"FINISHED"}
 

@@ -100,3 +100,64 @@ def test_a_target_moved_away_is_reported_and_aligned_on_request(capfd):
     kbs["A detail"].value, kbs["B detail"].value = 0.0, 1.0
     near_b = _distance_to_surface(h.evaluated(M), b_world)
     assert np.percentile(near_b, 99) <= 0.01 * diagonal(b), np.percentile(near_b, 99) / diagonal(b)
+
+
+def _a_and_b_sphere():
+    import pointscale as ps
+
+    a = h.mesh_object(ps.shapes.bumpy_sphere(6000, coarse=0.05, coarse_frequency=3.0, fine=0.0), name="A")
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32)
+    b = bpy.context.active_object
+    b.name = "B"
+    return a, b
+
+
+def _morph_at_b(a, b, capfd):
+    bpy.context.view_layer.objects.active = a
+    a.data.multiscale.morph_target = b
+    a.data.multiscale.morph_samples = 5000
+    capfd.readouterr()
+    assert bpy.ops.pointscale.morph() == {"FINISHED"}
+    m = bpy.context.active_object
+    kbs = m.data.shape_keys.key_blocks
+    kbs["A detail"].value, kbs["B detail"].value = 0.0, 1.0
+    return h.evaluated(m), capfd.readouterr().out
+
+
+def test_morph_reads_b_whole_under_its_mirror_modifier(capfd):
+    # B a half under a Mirror modifier, shown whole: only the half was read (the morph's other
+    # half stayed round, up to 0.3 off B as shown) and the warning blamed the base.
+    import bmesh
+
+    a, b = _a_and_b_sphere()
+    bm = bmesh.new()
+    bm.from_mesh(b.data)
+    bmesh.ops.delete(bm, geom=[v for v in bm.verts if v.co.x < -1e-5], context="VERTS")
+    for v in bm.verts:
+        v.co.z *= 1.3
+        v.co.y *= 0.9
+    bm.to_mesh(b.data)
+    bm.free()
+    b.data.update()
+    b.modifiers.new("Mirror", "MIRROR").use_clip = True
+    shown, out = _morph_at_b(a, b, capfd)
+    r = np.sqrt(shown[:, 0] ** 2 + (shown[:, 1] / 0.9) ** 2 + (shown[:, 2] / 1.3) ** 2)  # 1 on B as shown
+    far_half = shown[:, 0] < -0.05
+    assert far_half.sum() > 1000
+    assert np.abs(r[far_half] - 1).max() < 0.01 and np.abs(r[~far_half] - 1).max() < 0.01  # 0.002, 0.003
+    assert "the target 'B' is read as shown, with its modifier 'Mirror'" in out
+
+
+def test_morph_reads_the_shape_key_b_shows(capfd):
+    # B's 'Fat' key at 1 (1.4 wide): the morph landed on B's Basis (1.0 wide) without a word.
+    a, b = _a_and_b_sphere()
+    b.shape_key_add(name="Basis")
+    fat = b.shape_key_add(name="Fat")
+    co = h.key(b.data, "Fat")
+    co[:, :2] *= 1.4
+    h.set_key(b.data, "Fat", co)
+    fat.value = 1.0
+    shown, out = _morph_at_b(a, b, capfd)
+    radius = np.linalg.norm(shown[:, :2], axis=1).max()
+    assert 1.39 < radius < 1.41  # 1.39999
+    assert "the target 'B' is read as shown, with its shape key 'Fat'" in out
