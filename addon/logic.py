@@ -344,30 +344,56 @@ def loose_vertices_message(n_vertices: int, edges: np.ndarray) -> str | None:
             "scan's untriangulated points do: their base lies on that part's surface")
 
 
+def _whole(x: float) -> int:
+    """The whole number at or above ``x``, without the float noise of a power (8 / 0.02**2 is
+    20000.000000000004, not 20001)."""
+    return int(np.ceil(x * (1 - 1e-12)))
+
+
+def count_words(count: int) -> str:
+    """A vertex count as an artist reads it: exact below a million, else rounded in words."""
+    if count < 1_000_000:
+        return str(count)
+    for size, word in ((1e12, None), (1e9, "billion"), (1e6, "million")):
+        if count >= size:
+            return f"about {count / size:.3g} {word}" if word else "more than a trillion"
+    return str(count)  # (not reached)
+
+
 def levels_that_fit(n: int, levels: int, decimation: float, min_coarse: int,
-                    parts: bool = False) -> tuple[int, str | None]:
+                    parts: bool = False, safe: int = 100, max_decimation: float = 0.9) -> tuple[int, str | None]:
     """The most levels (at most `levels`) whose coarsest keeps min_coarse of n points at this
     decimation, and what to tell the artist when that is fewer than asked: (levels, message).
+    The message's hint gives a level 0 of at least ``safe`` points (the engine calls a coarser
+    base distorted): a Decimation up to ``max_decimation`` (the panel's), else fewer levels.
     With ``parts`` (Keep Parts Apart), n is the vertex count of the largest connected part that
     is not flat: each part is decomposed alone, and a flat one keeps no bands, so that part
     bounds the levels, not the whole mesh.
     Raises ValueError when not even a base and one band fit."""
-    def fits(count: int) -> bool:
-        return np.floor(decimation ** (count - 1) * n) >= min_coarse
+    def keeps(count: int, at: float, least: int) -> bool:
+        return np.floor(at ** (count - 1) * n) >= least
 
     what = "the largest part of the mesh that is not flat" if parts else "the mesh"
     apart = (", or turn off Keep Parts Apart to decompose the parts as one surface" if parts else "")
-    fitting = max((count for count in range(2, levels + 1) if fits(count)), default=0)
+    fitting = max((count for count in range(2, levels + 1) if keeps(count, decimation, min_coarse)), default=0)
     if fitting == levels:
         return levels, None
-    need = int(np.ceil(min_coarse / decimation ** (levels - 1)))
+    need = count_words(_whole(min_coarse / decimation ** (levels - 1)))
     if fitting < 2:
-        least = int(np.ceil(min_coarse / decimation))
-        raise ValueError(f"{what} has {n} vertices, and even 2 levels at Decimation {decimation:g} need {least}: "
+        least = count_words(_whole(min_coarse / decimation))
+        raise ValueError(f"{what} has {n} vertices, and even 2 levels at Decimation {decimation:g} need {least} vertices: "
                          f"subdivide it (a Subdivision Surface modifier, applied) or decompose a denser mesh{apart}")
-    wanted = float(np.ceil(100 * (min_coarse / n) ** (1.0 / (levels - 1))) / 100)
-    hint = f"raise Decimation to {wanted:g}" if wanted < 1.0 else "use fewer levels"
-    return fitting, (f"{what} has {n} vertices, and {levels} levels at Decimation {decimation:g} need {need}: "
+    wanted = _whole(100 * (safe / n) ** (1.0 / (levels - 1))) / 100
+    while wanted <= max_decimation and not keeps(levels, wanted, safe):
+        wanted = round(wanted + 0.01, 2)
+    safe_levels = max((count for count in range(2, levels) if keeps(count, decimation, safe)), default=0)
+    if wanted <= max_decimation:
+        hint = f"raise Decimation to {wanted:g} (then level 0 keeps at least {safe} points)"
+    elif safe_levels:
+        hint = f"use {safe_levels} levels (then level 0 keeps at least {safe} points)"
+    else:
+        hint = "use fewer levels"
+    return fitting, (f"{what} has {n} vertices, and {levels} levels at Decimation {decimation:g} need {need} vertices: "
                      f"decomposed with {fitting} levels. For {levels}, subdivide the mesh (a Subdivision Surface "
                      f"modifier, applied) or {hint}{apart}")
 

@@ -120,10 +120,15 @@ def test_levels_that_fit_a_small_mesh_say_what_to_do(logic):
     levels, message = logic.levels_that_fit(507, 4, 0.25, 8)
     assert levels == 3
     assert "507 vertices" in message and "need 512" in message and "Subdivision Surface" in message
-    assert "raise Decimation to 0.26" in message
-    # the hint holds: the engine takes Suzanne's count at 4 levels with that decimation
+    # the hint holds: the engine takes Suzanne's count at 4 levels with that decimation, and
+    # does not call the base distorted (0.26, the least it takes, left 8 points: distorted)
+    assert "raise Decimation to 0.59 (then level 0 keeps at least 100 points)" in message
     points = ps.shapes.sphere(507, seed=1)
-    assert ps.decompose(points, 4, decimation=0.26).n_levels == 4
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert ps.decompose(points, 4, decimation=0.59).n_levels == 4
     with pytest.raises(ValueError, match="need"):
         ps.decompose(points, 4, decimation=0.25)
     assert logic.levels_that_fit(100_000, 4, 0.25, 8) == (4, None)
@@ -247,3 +252,22 @@ def test_faces_wound_against_neighbours(logic):
     assert logic.winding_message(0, 10) is None
     message = logic.winding_message(12, 16)
     assert "12 of 16 faces" in message and "Mesh > Normals > Recalculate Outside" in message
+
+
+def test_levels_that_fit_print_whole_numbers_and_a_safe_hint(logic):
+    # 12 levels at Decimation 0.02 on 20k vertices: the count needed was printed as
+    # '39062499999999991808' and the hint (Decimation 0.5) left level 0 at 9 points.
+    levels, message = logic.levels_that_fit(20000, 12, 0.02, 8, safe=100)
+    assert levels == 3
+    assert "need more than a trillion vertices" in message
+    assert "raise Decimation to 0.62 (then level 0 keeps at least 100 points)" in message
+    assert np.floor(0.62 ** 11 * 20000) >= 100 > np.floor(0.61 ** 11 * 20000)
+    # no float noise in small counts: 8 / 0.02 ** 2 is 20000.000000000004
+    assert "need 20000 vertices" in logic.levels_that_fit(19000, 3, 0.02, 8)[1]
+    assert logic.count_words(39062499999999991808) == "more than a trillion"
+    assert logic.count_words(2_500_000) == "about 2.5 million" and logic.count_words(999_999) == "999999"
+    # no Decimation up to the panel's 0.9 gives a safe base: fewer levels that do
+    message = logic.levels_that_fit(150, 8, 0.5, 8, safe=100)[1]
+    assert message.endswith("or use fewer levels")  # 150 * 0.5 = 75: not even 2 levels keep 100
+    message = logic.levels_that_fit(1000, 30, 0.5, 8, safe=100)[1]
+    assert "use 4 levels" in message  # 1000 * 0.5 ** 3 = 125 >= 100

@@ -75,6 +75,13 @@ def _mirrored_otherwise_message(obj) -> str | None:
             "whose Mirror modifier the mesh is made for")
 
 
+def _levels_that_fit(ps, n, levels, decimation, parts=False):
+    """logic.levels_that_fit with the engine's least level 0, and the one it calls safe (a
+    coarser base can be distorted) for the hint."""
+    return compute.logic.levels_that_fit(n, levels, decimation, ps.multiscale.MIN_COARSE_POINTS, parts=parts,
+                                         safe=getattr(ps.multiscale, "FEW_COARSE_POINTS", 100))
+
+
 def _largest_part(ps, points, edges) -> int:
     """The vertex count of the part whose size bounds the levels when Keep Parts Apart
     decomposes each part alone: the largest that spans a surface (a flat ground under a rock
@@ -116,12 +123,10 @@ def _prepare(op, context):
         # whole, else only when the engine refuses them (_decompose_fitting_parts; the names
         # checked below for these levels include those of fewer).
         asked = kwargs["levels"]
-        kwargs["levels"], op._levels_note = compute.logic.levels_that_fit(
-            len(points), asked, kwargs["decimation"], ps.multiscale.MIN_COARSE_POINTS)
+        kwargs["levels"], op._levels_note = _levels_that_fit(ps, len(points), asked, kwargs["decimation"])
         largest = _largest_part(ps, points, kwargs["edges"]) if op._levels_note and "edges" in kwargs else len(points)
         if largest < len(points):
-            kwargs["levels"], op._levels_note = compute.logic.levels_that_fit(
-                largest, asked, kwargs["decimation"], ps.multiscale.MIN_COARSE_POINTS, parts=True)
+            kwargs["levels"], op._levels_note = _levels_that_fit(ps, largest, asked, kwargs["decimation"], parts=True)
         op._levels_fitted = kwargs["levels"]
         k = kwargs["levels"] - 1
         problem = _names_taken(context, obj, k)
@@ -179,8 +184,8 @@ def _decompose_fitting_parts(ps, points, kwargs, progress):
         if "edges" not in kwargs or not compute.logic.is_parts_refusal(str(exc)):
             raise
         refusal = exc
-    levels, note = compute.logic.levels_that_fit(_largest_part(ps, points, kwargs["edges"]), kwargs["levels"],
-                                                 kwargs["decimation"], ps.multiscale.MIN_COARSE_POINTS, parts=True)
+    levels, note = _levels_that_fit(ps, _largest_part(ps, points, kwargs["edges"]), kwargs["levels"],
+                                   kwargs["decimation"], parts=True)
     if levels >= kwargs["levels"]:
         raise refusal
     kwargs = dict(kwargs, levels=levels)
