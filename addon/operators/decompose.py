@@ -109,6 +109,9 @@ def _prepare(op, context):
         if problem:
             raise ValueError(problem)
         op._input_notes = []
+        # Decompose works on the active object, with its mesh's settings, as every other operator
+        # of the add-on: other selected objects are named, not decomposed with settings not theirs.
+        op._others = [o.name for o in context.selected_objects if o != obj and o.type == "MESH" and o.data != mesh]
         if s.keep_parts and len(mesh.edges):
             kwargs["edges"] = mesh_io.read_edges(mesh)
             op._input_notes.append(compute.logic.loose_vertices_message(len(points), kwargs["edges"]))
@@ -313,6 +316,13 @@ class POINTSCALE_OT_decompose(RunsInBackground, bpy.types.Operator):
         if getattr(self, "_mirror_note", None):
             self.report({"INFO"}, f"Decompose '{obj.name}': {self._mirror_note}")
         self.report({"INFO"}, f"Decomposed '{obj.name}': {n} vertices, {k + 1} levels, {k} bands")
+        others = getattr(self, "_others", ())
+        if others:
+            many = len(others) > 1
+            self.report({"WARNING"}, f"Decomposed only the active object '{obj.name}': "
+                                     f"{', '.join(repr(name) for name in others)} {'are' if many else 'is'} selected "
+                                     f"too but left as {'they are' if many else 'it is'} (each mesh has its own "
+                                     "settings: make each active and Decompose it)")
         return {"FINISHED"}
 
     # --- modal: the UI button (_background.py)
