@@ -225,10 +225,6 @@ class POINTSCALE_OT_morph(RunsInBackground, bpy.types.Operator):
         a = mesh_io.read_basis(a_obj.data).astype(np.float64)
         self._seams = _mirror_seams(a_obj, a)
         b, self._b_shown = _shown_points(context, b_obj, a_obj)  # B as the artist sees it
-        if len(b) < 4:
-            self.report({"ERROR"}, f"Morph: the target '{b_obj.name}' shows {len(b)} vertices (after its modifiers): "
-                                   "nothing to morph towards")
-            return None
         base = _world_points(s.morph_base_object, a_obj) if s.morph_base == "OBJECT" else None
         return a, b, base, (s.morph_samples, s.morph_align)
 
