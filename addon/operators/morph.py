@@ -75,8 +75,8 @@ def _mirror_seams(obj, points) -> list:
 
 def morph_problem(context):
     obj = context.active_object
-    problem = state.mesh_object_problem(obj) or state.engine_problem()
-    if problem:
+    problem = state.mesh_object_problem(obj) or state.engine_problem() or state.removed_basis_problem(obj)
+    if problem:  # (with A's Basis key removed, its reference key is a smooth level, not its shape)
         return problem
     s = obj.data.multiscale
     target = s.morph_target or next(

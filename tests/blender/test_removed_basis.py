@@ -81,3 +81,15 @@ def test_clear_refuses_when_the_keys_that_hold_the_original_were_edited():
     h.set_key(obj.data, "Band 1", h.key(obj.data, "Band 1") * np.float32(1.01))
     h.assert_refused(obj, "clear", r"the Basis key of 'K' was removed, and 'Band 1', which holds the original "
                                    r"shape, was edited since Decompose: undo the removal \(Ctrl\+Z\)")
+
+
+def test_morph_refuses_an_a_whose_basis_key_was_removed():
+    # A's reference key is then its smooth Level 0: the morph was made from that, not from A.
+    obj, _, _ = _decomposed_then_basis_removed(name="A")
+    b = h.mesh_object(h.noisy_sphere(2000, seed=1) * 1.2, name="B")
+    bpy.context.view_layer.objects.active = obj
+    obj.data.multiscale.morph_target = b
+    n_objects = len(bpy.data.objects)
+    with pytest.raises(RuntimeError, match=r"the Basis key of 'A' was removed.*Undo the removal \(Ctrl\+Z\)"):
+        bpy.ops.pointscale.morph()
+    assert len(bpy.data.objects) == n_objects
