@@ -93,6 +93,8 @@ def test_the_command_line_decomposes_a_text_cloud_into_xyz_levels_and_leaves_txt
     assert sorted(p.name for p in out.iterdir()) == ["decomposition.npz", "level_0.xyz", "level_1.txt", "level_1.xyz",
                                                      "level_2.xyz", "source.npz"]
     assert (out / "level_1.txt").read_text() == "my notes on level 1\n"
+    for level in range(3):  # with the header line CloudCompare reads ("#" lines it takes for rows)
+        assert (out / f"level_{level}.xyz").read_text().startswith("//x y z nx:f8 ny:f8 nz:f8 red:u1")
     finest = io.read(out / "level_2.xyz")
     assert np.array_equal(finest.points, points)
     assert np.array_equal(finest.vertex_attributes["Intensity"], intensity)
@@ -112,3 +114,38 @@ def test_levels_are_never_written_as_txt(tmp_path):
     io.write(tmp_path / "scan.ply", io.Scan(points=ps.shapes.bumpy_sphere(3000)))
     message = one_line_error(run_cli("decompose", "scan.ply", "-o", "out", "--format", "txt", cwd=tmp_path))
     assert "level files are never .txt" in message and ".xyz" in message
+
+
+def test_an_xyz_keeps_its_own_comment_mark(tmp_path):
+    """An .xyz read with "#" lines is written back with "#", one read with CloudCompare's "//"
+    with "//"."""
+    points = ps.shapes.bumpy_sphere(500)
+    for mark in ("#", "//"):
+        text = f"{mark} x y z intensity\n" + "".join(f"{p[0]:.6f} {p[1]:.6f} {p[2]:.6f} 7\n" for p in points)
+        (tmp_path / "in.xyz").write_text(text)
+        io.write(tmp_path / "out.xyz", io.read(tmp_path / "in.xyz"))
+        assert (tmp_path / "out.xyz").read_text().startswith(f"{mark}{' ' if mark == '#' else ''}x y z intensity")
+
+
+@pytest.mark.parametrize("text", ["1.5,2.5,3.5\n", "//X;Y;Z\n1.5;2.5;3.5\n", "1,2,3\n# a note\n4,5,6\n"])
+def test_the_separator_is_told_from_the_first_row(tmp_path, text):
+    (tmp_path / "a.xyz").write_text(text)
+    assert io.read(tmp_path / "a.xyz").points[0].tolist() == ([1.5, 2.5, 3.5] if "." in text else [1.0, 2.0, 3.0])
+
+
+def test_cloudcompare_float_colours_are_colours_and_fill_las_16_bit_fields(tmp_path):
+    """CloudCompare's export can write colours as floats 0..1 (Rf Gf Bf): read as the colours
+    red, green, blue, which the LAS writer scales to its 16 bits, not as three unknown columns
+    that LAS would keep as extra bytes."""
+    points = ps.shapes.bumpy_sphere(800)
+    colours = np.random.default_rng(2).uniform(0, 1, (len(points), 3)).round(6)
+    rows = np.column_stack([points, colours])
+    (tmp_path / "c.txt").write_text("//X,Y,Z,Rf,Gf,Bf\n" + "".join(",".join(f"{v:.6f}" for v in r) + "\n" for r in rows))
+    scan = io.read(tmp_path / "c.txt")
+    assert [k for k in scan.vertex_attributes] == ["red", "green", "blue"]
+    assert np.array_equal(scan.vertex_attributes["green"], rows[:, 4])
+    pytest.importorskip("laspy")
+    with pytest.warns(UserWarning):
+        io.write(tmp_path / "c.las", scan)
+    back = io.read(tmp_path / "c.las")
+    assert np.abs(back.vertex_attributes["red"] / 65535.0 - colours[:, 0]).max() < 1e-5

@@ -177,7 +177,8 @@ def cmd_decompose(args) -> None:
         check_format_holds(extension, scan, args.input, shown=out / level_name(0, extension))
         if extension not in FORMATS_WITH_VERTEX_SCALARS:
             warnings.warn(f"{extension} has no room for a vertex scalar: the level files leave out each band's detail, "
-                          f"which {DECOMPOSITION_FILE} holds (.ply, .las, .laz and .xyz carry it)", stacklevel=1)
+                          f"which {DECOMPOSITION_FILE} holds (.ply, .las, .laz and .xyz level files carry it)",
+                          stacklevel=1)
         if extension == ".stl" and Path(args.input).suffix.lower() != ".stl":  # an STL input's own order comes back
             warnings.warn(".stl stores triangle corners, and reading it merges and renumbers the vertices, so an STL "
                           "level 0 cannot come back as reconstruct --base: to edit the base, write the levels with "

@@ -76,7 +76,8 @@ def write(path, scan: Scan) -> None:
         lines = kept_comments(scan)
         if lines:  # a CRS in a comment is the kind of thing that must not vanish unsaid
             warnings.warn(f"{os.fspath(path)}: {suffix} has no place for the input's comment lines; {len(lines)} not "
-                          f"written (the first: {lines[0][:60]!r}); .ply, .xyz and .obj keep them", stacklevel=2)
+                          f"written (the first: {lines[0][:60]!r}); .ply, .xyz, .txt, .asc and .obj keep them",
+                          stacklevel=2)
     if suffix not in (".las", ".laz"):
         _warn_of_the_coordinate_system(os.fspath(path), suffix, scan)
     try:
@@ -101,7 +102,7 @@ def _warn_of_the_coordinate_system(path: str, suffix: str, scan: Scan) -> None:
         warnings.warn(f"{path}: {suffix} has no field for the LAS coordinate system {name!r}; written as the "
                       f"comment line {line[:60] + ('...' if len(line) > 60 else '')!r}", stacklevel=3)
     else:
-        keeps = "; .ply, .xyz and .obj keep it as a comment line" if line is not None else ""
+        keeps = "; .ply, .xyz, .txt, .asc and .obj keep it as a comment line" if line is not None else ""
         warnings.warn(f"{path}: {suffix} has no place for the LAS coordinate system {name!r}; not written{keeps}",
                       stacklevel=3)
 

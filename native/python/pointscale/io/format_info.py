@@ -38,6 +38,7 @@ def check_format_info(info: dict, n_points: int) -> None:
         _check_las(info)
     elif kind in ("xyz", "pts", "obj"):
         _check(info, "comments", _single_lines, "a list of texts of one line each (they become comment lines)")
+        _check(info, "header_mark", lambda v: v in ("#", "//"), "'#' or '//'")
     elif kind == "e57":
         _check(info, "stations", lambda v: _list_of(v, dict) and all(map(_station, v)),
                "a list of scans (a name of one line, a rotation of 4 numbers not all 0, a translation of 3)")

@@ -226,7 +226,8 @@ def _corners_of_mixed_forms(tokens: list, lengths: np.ndarray, path: str):
 def _per_vertex(values: np.ndarray, faces, corner: np.ndarray | None, n: int, what: str, path: str):
     """Per-corner values (vt or vn through the face references) as one per vertex, or None.
     Corners of -1 give none (faces of another form): a vertex only such faces use is filled with
-    0, with a warning counting them."""
+    0, with a warning counting them; normals are then left out instead (a zero normal orients
+    nothing, and decompose refuses it)."""
     if len(values) == 0:
         return None
     if corner is None:
@@ -245,6 +246,10 @@ def _per_vertex(values: np.ndarray, faces, corner: np.ndarray | None, n: int, wh
     if split:
         warnings.warn(f"{path}: {split} face corners give their vertex different {what} (a seam); "
                       "each vertex keeps its first", stacklevel=4)
+    if partial and not have.all() and what == "normals":  # a zero normal would be refused as an orientation
+        warnings.warn(f"{path}: some faces give normals and others do not; {int((~have).sum())} of {n} vertices "
+                      f"have none, so the file's normals are left out (decompose estimates its own)", stacklevel=4)
+        return None
     if partial and not have.all():
         warnings.warn(f"{path}: some faces give {what} and others do not; {int((~have).sum())} of {n} vertices "
                       f"have none, filled with 0", stacklevel=4)

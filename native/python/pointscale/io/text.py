@@ -68,6 +68,8 @@ def read_xyz(path) -> Scan:
     if names_given:
         _name_colour_columns(names, dtypes, rows, declared)
     info = {"format": "xyz", "header": bool(names_given)}
+    if _cloudcompare_style(path):  # its levels and results are written for CloudCompare to read too
+        info["header_mark"] = "//"
     kept = [c for c in comments if c and not (names_given and c is header)]
     if kept:  # a CRS, the scanner, the date: written back as comment lines (write_xyz), and into PLY
         info["comments"] = kept
@@ -76,6 +78,8 @@ def read_xyz(path) -> Scan:
 
 # The names a header may give colour columns (CloudCompare writes R G B), lower-cased.
 _COLOUR_NAMES = {"r": "red", "red": "red", "g": "green", "green": "green", "b": "blue", "blue": "blue"}
+# CloudCompare's float colours (its export's "float colours" option: Rf Gf Bf, 0..1), lower-cased.
+_FLOAT_COLOUR_NAMES = {"rf": "red", "gf": "green", "bf": "blue"}
 
 
 def _name_colour_columns(names: list, dtypes: list, rows: np.ndarray, declared: set) -> None:
@@ -85,6 +89,8 @@ def _name_colour_columns(names: list, dtypes: list, rows: np.ndarray, declared: 
     attributes R, G, B that no writer knows for colours (LAS wrote a point format without RGB,
     PLY 'property double R'). Colours that are not whole numbers, or a name given twice, stay
     as they are."""
+    if _name_float_colour_columns(names, dtypes, rows):
+        return
     columns = {}
     for i, name in enumerate(names[3:], start=3):
         colour = _COLOUR_NAMES.get(name.lower())
@@ -103,6 +109,28 @@ def _name_colour_columns(names: list, dtypes: list, rows: np.ndarray, declared: 
         names[i] = colour
         if i not in declared:
             dtypes[i] = width
+
+
+def _name_float_colour_columns(names: list, dtypes: list, rows: np.ndarray) -> bool:
+    """In place: CloudCompare's float colour columns Rf Gf Bf (within 0..1) become red, green,
+    blue as float64, which the LAS writer scales to its 16 bits like any float colour. Whether
+    it named them."""
+    columns = {}
+    for i, name in enumerate(names[3:], start=3):
+        colour = _FLOAT_COLOUR_NAMES.get(name.lower())
+        if colour is not None:
+            columns.setdefault(colour, []).append(i)
+    if sorted(columns) != ["blue", "green", "red"] or any(len(c) != 1 for c in columns.values()):
+        return False
+    order = [columns[c][0] for c in ("red", "green", "blue")]
+    values = rows[:, order]
+    if any(np.dtype(dtypes[i]).kind != "f" for i in order) or not (values.min() >= 0.0 and values.max() <= 1.0):
+        return False
+    if any(c in names for c in ("red", "green", "blue")):  # the file has those names already
+        return False
+    for i, colour in zip(order, ("red", "green", "blue")):
+        names[i] = colour
+    return True
 
 
 def _declared_columns(header: str, ncols: int) -> set:
@@ -201,7 +229,20 @@ def _pts_rows(path: str):
 
 
 def write_xyz(path, scan: Scan) -> None:
-    _write_xyz(path, scan, _HEADER_MARK, always_header=False)
+    """An .xyz; its header line starts with "//" where the scan was read from a CloudCompare-style
+    file (a .txt or .asc, or "//" comment lines), "#" otherwise."""
+    info = scan.format_info
+    mark = "//" if info.get("format") == "xyz" and info.get("header_mark") == "//" else _HEADER_MARK
+    _write_xyz(path, scan, mark, always_header=False)
+
+
+def _cloudcompare_style(path: str) -> bool:
+    """Whether a text cloud comes from CloudCompare's world: a .txt or .asc, or a first line that
+    starts with "//", the one comment mark CloudCompare's ASCII reader knows."""
+    if os.path.splitext(path)[1].lower() in (".txt", ".asc"):
+        return True
+    with open_text(path, "a text file") as f:
+        return f.readline().lstrip().startswith("//")
 
 
 def write_cloudcompare(path, scan: Scan) -> None:
@@ -310,13 +351,14 @@ def _load_xyz(path: str):
         with open_text(path, "a text file") as f:
             comments = _leading_comments(f)
             where = f.tell()
-            words = f.readline().split()
+            first = f.readline()
+            words = first.split()
             if len(words) == 1 and words[0].isdigit():
                 count = int(words[0])
                 where = f.tell()
-            first = f.readline()
+                first = f.readline()
             f.seek(where)
-            delimiter = _delimiter(first)
+            delimiter = _delimiter(first)  # the first row's
             rows = _rows_of(f, delimiter=delimiter, comments="#")
     except ValueError as exc:
         _raise_unreadable(path, exc)
@@ -324,7 +366,8 @@ def _load_xyz(path: str):
         raise ValueError(f"{path}: cannot read ({exc})") from None
     _check_rows(path, rows)
     if count is not None and count != len(rows):
-        raise ValueError(f"{path}: the count line says {count} points, the file has {len(rows)} (truncated?)")
+        raise ValueError(f"{path}: the count line says {count} points, the file has {len(rows)}"
+                         f"{' (truncated?)' if len(rows) < count else ''}")
     return comments, rows, _Layout(len(comments) + (count is not None), delimiter)
 
 
