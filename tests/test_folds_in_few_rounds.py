@@ -63,5 +63,5 @@ def test_a_fold_that_its_own_gain_cannot_undo_hands_it_on_in_its_third_round():
     the tenth, when it hands its strength on to its ring: 10 rounds, now 3."""
     dec = ps.decompose(ps.io.read(shared_model("bunny.ply")).points, levels=4)
     _, folds = ps.reconstruct(dec, (2, 2, 1), folds="prevent")
-    assert folds.count_before > 2500 and folds.count == 0 and not folds.capped  # measured 2915
+    assert folds.count_before > 2500 and folds.count == 0 and not folds.capped  # measured 2999
     assert folds.rounds <= 4, folds.rounds

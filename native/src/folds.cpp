@@ -54,6 +54,26 @@ inline bool reversed(const Vec3& a, const Vec3& b) {
   return d < 0.0 && d * d > fold_rounding * fold_rounding * a.squaredNorm() * b.squaredNorm();
 }
 
+// An input edge within this sine of a right angle to its base edge has no clear order along it:
+// the wall of a box handle stands at right angles to its base, and the edge from a top corner to
+// the wall point below it turned from +0.3 to -0.9 degrees past the right angle under a bump of
+// the base 0.5% of the model high, a fold nobody could see. With the input's reference such an
+// edge folds only once its result turns past the right angle by as much again (a gain of -1 or
+// 2 turns some 95 to 145 degrees from their base edges: folds).
+constexpr double right_angle_margin = 0.05;  // sin(2.9 degrees)
+
+// a . b within right_angle_margin |a| |b| of zero, without the square roots.
+inline bool at_right_angle(const Vec3& a, const Vec3& b) {
+  const double d = a.dot(b);
+  return d * d <= right_angle_margin * right_angle_margin * a.squaredNorm() * b.squaredNorm();
+}
+
+// a . b < -right_angle_margin |a| |b|: past the right angle by the margin.
+inline bool past_right_angle(const Vec3& a, const Vec3& b) {
+  const double d = a.dot(b);
+  return d < 0.0 && d * d > right_angle_margin * right_angle_margin * a.squaredNorm() * b.squaredNorm();
+}
+
 // A ring's plane m0 x m1 is there only where it stands clear of rounding: its sine above
 // plane_rounding. Where the ring lies on a line (three points along a CAD model's edge, the rest
 // of the ring on the other side of a thin wall), the cross product is rounding's, of any
@@ -171,13 +191,14 @@ inline void walk_ring_edges(const FoldReference& ref, std::uint16_t skip, const 
 // crossing test, and bit 0 the plane test. The stored base's plane is the reference's
 // (base_planes); an edited base's is summed here.
 inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std::uint16_t exempt, const SlotRows* edited,
-                              const SlotRows& r, Index s) {
+                              const SlotRows& r, Index s, std::uint16_t right = 0) {
   // The result's plane is summed in the same pass as the crossing test: ring_plane's sums,
   // without reading the ring twice.
   Vec3 mr0 = Vec3::Zero(), mr1 = Vec3::Zero();
   std::uint8_t kind = fold_none;
   walk_ring_edges(ref, skip, edited, r, s, [&](int m, const Vec3& db, const Vec3& dr, double u0, double u1) {
-    if (reversed(dr, db) && !((exempt >> m) & 1u)) kind |= fold_crossed;
+    if (!((exempt >> m) & 1u) && ((right >> m) & 1u ? past_right_angle(dr, db) : reversed(dr, db)))
+      kind |= fold_crossed;
     mr0 += u0 * dr;
     mr1 += u1 * dr;
   });
@@ -205,12 +226,14 @@ double first_root(double a, double b, double c) {
 // how far a fold's gain must go: on its plateau the ring's members share the fold's limiter.
 // Tests that do not fail at mu = 1 are left out (they hold on the whole way down, or dip
 // below only in between: the rounds after catch those). 1 where nothing fails.
+// An edge at right angles in the input (right) fails only past the margin, as in fold_kind, and
+// its share is then the one that brings it back to the right angle itself.
 double unfolding_share(const FoldReference& ref, std::uint16_t skip, std::uint16_t exempt, const SlotRows* edited,
-                       const SlotRows& r, Index s) {
+                       const SlotRows& r, Index s, std::uint16_t right = 0) {
   Vec3 mr0 = Vec3::Zero(), mr1 = Vec3::Zero(), mb0 = Vec3::Zero(), mb1 = Vec3::Zero();
   double share = 1.0;
   walk_ring_edges(ref, skip, edited, r, s, [&](int m, const Vec3& db, const Vec3& dr, double u0, double u1) {
-    if (reversed(dr, db) && !((exempt >> m) & 1u)) {
+    if (!((exempt >> m) & 1u) && ((right >> m) & 1u ? past_right_angle(dr, db) : reversed(dr, db))) {
       const double bb = db.squaredNorm();
       share = std::min(share, bb / (bb - dr.dot(db)));
     }
@@ -249,29 +272,20 @@ bool ring_on_a_line(const FoldReference& ref, std::uint16_t skip, Index s) {
   return !(half - gap > on_a_line_spread * (half + gap));
 }
 
-// An input edge within this sine of a right angle to its base edge has no order along it to keep
-// either: the wall of a box handle stands at right angles to its base, and the edge from a top
-// corner to the wall point below it turned from +0.3 to -0.9 degrees past the right angle under
-// a bump of the base 0.5% of the model high, a fold nobody could see.
-constexpr double right_angle_margin = 0.05;  // sin(2.9 degrees)
-
-// a . b within right_angle_margin |a| |b| of zero, without the square roots.
-inline bool at_right_angle(const Vec3& a, const Vec3& b) {
-  const double d = a.dot(b);
-  return d * d <= right_angle_margin * right_angle_margin * a.squaredNorm() * b.squaredNorm();
-}
-
-// The same, with the edges that fold as bits (bit 0 for the plane): what the input exempts. An
-// edge the input holds at right angles to the base is exempt too (right_angle_margin).
-std::uint16_t folding_bits(const FoldReference& ref, std::uint16_t skip, const SlotRows& r, Index s) {
+// The same, with the edges that fold as bits (bit 0 for the plane): what the input exempts.
+// right: receives the edges the input holds at right angles to the base (right_angle_margin).
+std::uint16_t folding_bits(const FoldReference& ref, std::uint16_t skip, const SlotRows& r, Index s,
+                           std::uint16_t& right) {
   const Index* ring = ref.rings.data() + static_cast<std::size_t>(s) * ref.ring_size;
   std::uint16_t bits = fold_kind(ref, skip, 0, nullptr, r, s) & fold_turned ? 1u : 0u;
   const Vec3 bi = ref.base.row(s).transpose(), ri = r(s);
+  right = 0;
   for (int m = 1; m < ref.ring_size; ++m) {
     if ((skip >> m) & 1u) continue;
     const Vec3 d0 = ref.base.row(ring[m]).transpose() - bi;
     const Vec3 dr = r(ring[m]) - ri;
-    if (reversed(dr, d0) || at_right_angle(dr, d0)) bits |= static_cast<std::uint16_t>(1u << m);
+    if (reversed(dr, d0)) bits |= static_cast<std::uint16_t>(1u << m);
+    else if (at_right_angle(dr, d0)) right |= static_cast<std::uint16_t>(1u << m);
   }
   return bits;
 }
@@ -317,6 +331,7 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input, 
   Points input_by_slot;
   if (input) {
     ref.exempt.assign(n, 0);
+    ref.right_angles.assign(n, 0);
     input_by_slot = in_slot_order(*input, ref);
   }
   const SlotRows in = by_slot(input_by_slot);
@@ -333,7 +348,7 @@ FoldReference fold_reference(const MultiscaleModel& model, const Points* input, 
       if (ring_on_a_line(ref, skip, static_cast<Index>(t))) skip |= 1u;
       ref.other_sheet[t] = skip;
       ref.base_planes.row(static_cast<Eigen::Index>(t)) = ring_plane(ref, skip, by_slot(ref.base), static_cast<Index>(t)).transpose();
-      if (input) ref.exempt[t] = folding_bits(ref, skip, in, static_cast<Index>(t));
+      if (input) ref.exempt[t] = folding_bits(ref, skip, in, static_cast<Index>(t), ref.right_angles[t]);
     }
   }, {}, 4096);
   // The rings reversed, by a counting sort over the members.
@@ -367,7 +382,8 @@ std::size_t folds_everywhere(const FoldReference& ref, const SlotRows* edited, c
   parallel_for(n, [&](std::size_t b, std::size_t end) {
     for (std::size_t t = b; t < end; ++t)
       kind[static_cast<std::size_t>(ref.order[t])] =
-          fold_kind(ref, ref.other_sheet[t], exempting ? ref.exempt[t] : 0, edited, r, static_cast<Index>(t));
+          fold_kind(ref, ref.other_sheet[t], exempting ? ref.exempt[t] : 0, edited, r, static_cast<Index>(t),
+                    exempting ? ref.right_angles[t] : 0);
   }, {}, 4096);
   return n - static_cast<std::size_t>(std::count(kind.begin(), kind.end(), std::uint8_t(fold_none)));
 }
@@ -391,7 +407,8 @@ void folds_at(const FoldReference& ref, const SlotRows* edited, const SlotRows& 
     for (std::size_t k = b; k < end; ++k) {
       const std::size_t s = static_cast<std::size_t>(slots[k]);
       kind[static_cast<std::size_t>(ref.order[s])] =
-          fold_kind(ref, ref.other_sheet[s], exempting ? ref.exempt[s] : 0, edited, r, static_cast<Index>(s));
+          fold_kind(ref, ref.other_sheet[s], exempting ? ref.exempt[s] : 0, edited, r, static_cast<Index>(s),
+                    exempting ? ref.right_angles[s] : 0);
     }
   }, {}, 1024);
 }
@@ -579,7 +596,7 @@ FoldLimitReport limit_folds(const MultiscaleModel& model, const FoldReference& r
       for (std::size_t k = b; k < e; ++k) {
         const std::size_t f = static_cast<std::size_t>(folds[k]);
         const double share = unfolding_share(ref, ref.other_sheet[f], exempting ? ref.exempt[f] : 0, e_rows, r,
-                                             folds[k]);
+                                             folds[k], exempting ? ref.right_angles[f] : 0);
         guess[k] = 1.0 - unfolding_margin * share * (1.0 - lowered_now[f]);
       }
     }, {}, 256);

@@ -402,7 +402,8 @@ void check_folds_input(const MultiscaleModel& model, const FoldReference& ref, c
   const Eigen::Index n = model.base.rows();
   const std::size_t un = static_cast<std::size_t>(n);
   if (ref.other_sheet.size() != un || ref.order.size() != un || ref.slot.size() != un ||
-      (!ref.exempt.empty() && ref.exempt.size() != un) || ref.rings.size() != un * static_cast<std::size_t>(ref.ring_size) ||
+      (!ref.exempt.empty() && ref.exempt.size() != un) ||
+      (!ref.right_angles.empty() && ref.right_angles.size() != un) || ref.rings.size() != un * static_cast<std::size_t>(ref.ring_size) ||
       ref.base_planes.rows() != n)
     fail("the fold reference was made for another model");
   check_rows(result.rows(), n, "points");

@@ -38,6 +38,9 @@ struct FoldReference {
                                            // and bit 0 where the stored ring lies on a line (no plane test)
   std::vector<std::uint16_t> exempt;       // #P, by slot: edges (bit m) and planes (bit 0) that already fold in
                                            // the input, or empty: every fold counts
+  std::vector<std::uint16_t> right_angles; // #P, by slot, beside exempt: edges the input holds within 3 degrees of
+                                           // right angles to their base edges, which fold only once their result
+                                           // turns 3 degrees past the right angle
   std::vector<Index> in_offsets;           // #P + 1, and
   IndexList in_rings;                      // the slots whose rings hold each slot (the rings reversed): slot s
                                            // is in the rings of in_rings[in_offsets[s] .. in_offsets[s+1])
