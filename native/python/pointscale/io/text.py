@@ -91,14 +91,9 @@ def _name_colour_columns(names: list, dtypes: list, rows: np.ndarray, declared: 
     as they are."""
     if _name_float_colour_columns(names, dtypes, rows):
         return
-    columns = {}
-    for i, name in enumerate(names[3:], start=3):
-        colour = _COLOUR_NAMES.get(name.lower())
-        if colour is not None:
-            columns.setdefault(colour, []).append(i)
-    if sorted(columns) != ["blue", "green", "red"] or any(len(c) != 1 for c in columns.values()):
+    order = _colour_columns(names, _COLOUR_NAMES)
+    if order is None:
         return
-    order = [columns[c][0] for c in ("red", "green", "blue")]
     if any(i in declared and np.dtype(dtypes[i]).kind not in "iu" for i in order):
         return  # declared floats (0..1 colours, or anything else): the header's word
     values = rows[:, order]
@@ -111,18 +106,26 @@ def _name_colour_columns(names: list, dtypes: list, rows: np.ndarray, declared: 
             dtypes[i] = width
 
 
+def _colour_columns(names: list, colour_names: dict) -> list | None:
+    """The columns (red, green, blue) that `colour_names` (lower-case name -> colour) finds after
+    x y z, each once; None unless all three are there, once each."""
+    columns = {}
+    for i, name in enumerate(names[3:], start=3):
+        colour = colour_names.get(name.lower())
+        if colour is not None:
+            columns.setdefault(colour, []).append(i)
+    if sorted(columns) != ["blue", "green", "red"] or any(len(c) != 1 for c in columns.values()):
+        return None
+    return [columns[c][0] for c in ("red", "green", "blue")]
+
+
 def _name_float_colour_columns(names: list, dtypes: list, rows: np.ndarray) -> bool:
     """In place: CloudCompare's float colour columns Rf Gf Bf (within 0..1) become red, green,
     blue as float64, which the LAS writer scales to its 16 bits like any float colour. Whether
     it named them."""
-    columns = {}
-    for i, name in enumerate(names[3:], start=3):
-        colour = _FLOAT_COLOUR_NAMES.get(name.lower())
-        if colour is not None:
-            columns.setdefault(colour, []).append(i)
-    if sorted(columns) != ["blue", "green", "red"] or any(len(c) != 1 for c in columns.values()):
+    order = _colour_columns(names, _FLOAT_COLOUR_NAMES)
+    if order is None:
         return False
-    order = [columns[c][0] for c in ("red", "green", "blue")]
     values = rows[:, order]
     if any(np.dtype(dtypes[i]).kind != "f" for i in order) or not (values.min() >= 0.0 and values.max() <= 1.0):
         return False
