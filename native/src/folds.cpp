@@ -74,6 +74,13 @@ inline bool past_right_angle(const Vec3& a, const Vec3& b) {
   return d < 0.0 && d * d > right_angle_margin * right_angle_margin * a.squaredNorm() * b.squaredNorm();
 }
 
+// Whether ring edge m (base db, result dr) fails the crossing test: never where the input exempts
+// it, past the margin where the input holds it at right angles (right), else where reversed.
+inline bool edge_folds(int m, std::uint16_t exempt, std::uint16_t right, const Vec3& dr, const Vec3& db) {
+  if ((exempt >> m) & 1u) return false;
+  return (right >> m) & 1u ? past_right_angle(dr, db) : reversed(dr, db);
+}
+
 // A ring's plane m0 x m1 is there only where it stands clear of rounding: its sine above
 // plane_rounding. Where the ring lies on a line (three points along a CAD model's edge, the rest
 // of the ring on the other side of a thin wall), the cross product is rounding's, of any
@@ -197,8 +204,7 @@ inline std::uint8_t fold_kind(const FoldReference& ref, std::uint16_t skip, std:
   Vec3 mr0 = Vec3::Zero(), mr1 = Vec3::Zero();
   std::uint8_t kind = fold_none;
   walk_ring_edges(ref, skip, edited, r, s, [&](int m, const Vec3& db, const Vec3& dr, double u0, double u1) {
-    if (!((exempt >> m) & 1u) && ((right >> m) & 1u ? past_right_angle(dr, db) : reversed(dr, db)))
-      kind |= fold_crossed;
+    if (edge_folds(m, exempt, right, dr, db)) kind |= fold_crossed;
     mr0 += u0 * dr;
     mr1 += u1 * dr;
   });
@@ -233,7 +239,7 @@ double unfolding_share(const FoldReference& ref, std::uint16_t skip, std::uint16
   Vec3 mr0 = Vec3::Zero(), mr1 = Vec3::Zero(), mb0 = Vec3::Zero(), mb1 = Vec3::Zero();
   double share = 1.0;
   walk_ring_edges(ref, skip, edited, r, s, [&](int m, const Vec3& db, const Vec3& dr, double u0, double u1) {
-    if (!((exempt >> m) & 1u) && ((right >> m) & 1u ? past_right_angle(dr, db) : reversed(dr, db))) {
+    if (edge_folds(m, exempt, right, dr, db)) {
       const double bb = db.squaredNorm();
       share = std::min(share, bb / (bb - dr.dot(db)));
     }

@@ -7,7 +7,8 @@ Vertex order is the file's. OBJ gives normals and UVs per face corner; a Scan ke
 vertex (the points are what Pointscale processes, so vertices are never split): a vertex whose
 corners disagree (a UV seam) keeps its first corner's value, with a warning. Faces may differ in
 their corners' form (f v/vt in a textured group, f v elsewhere); the vertices no face gives a UV
-(or normal) are then filled with 0, with a warning. The corners of one face share one form. Polygons are kept as
+are then filled with 0, and normals given by only some faces are left out, each with a warning.
+The corners of one face share one form. Polygons are kept as
 they are (no triangulation). Negative (relative) indices are resolved against the counts at the
 end of the file, which is exact when all vertices come before the faces, as in nearly every file.
 Groups, objects, materials and lines (l) are not kept (a warning counts them). Read, UVs are

@@ -35,6 +35,7 @@ import io
 import os
 import re
 import warnings
+from typing import NamedTuple
 
 import numpy as np
 
@@ -68,7 +69,7 @@ def read_xyz(path) -> Scan:
     if names_given:
         _name_colour_columns(names, dtypes, rows, declared)
     info = {"format": "xyz", "header": bool(names_given)}
-    if _cloudcompare_style(path):  # its levels and results are written for CloudCompare to read too
+    if layout.cloudcompare:  # its levels and results are written for CloudCompare to read too
         info["header_mark"] = "//"
     kept = [c for c in comments if c and not (names_given and c is header)]
     if kept:  # a CRS, the scanner, the date: written back as comment lines (write_xyz), and into PLY
@@ -239,15 +240,6 @@ def write_xyz(path, scan: Scan) -> None:
     _write_xyz(path, scan, mark, always_header=False)
 
 
-def _cloudcompare_style(path: str) -> bool:
-    """Whether a text cloud comes from CloudCompare's world: a .txt or .asc, or a first line that
-    starts with "//", the one comment mark CloudCompare's ASCII reader knows."""
-    if os.path.splitext(path)[1].lower() in (".txt", ".asc"):
-        return True
-    with open_text(path, "a text file") as f:
-        return f.readline().lstrip().startswith("//")
-
-
 def write_cloudcompare(path, scan: Scan) -> None:
     """A .txt or .asc: XYZ's columns under a header line that is always there and starts with
     "//", the one comment mark CloudCompare's ASCII reader knows ("#" lines it takes for rows)."""
@@ -334,12 +326,14 @@ def _load_pts(path: str, leading: list):
     return header, rows
 
 
-class _Layout:
+class _Layout(NamedTuple):
     """How an XYZ file's rows are laid out: the lines above them (comment lines, and a count line
-    where there is one) and what parts their values (None: spaces or tabs)."""
-
-    def __init__(self, skip: int, delimiter: str | None):
-        self.skip, self.delimiter = skip, delimiter
+    where there is one), what parts their values (None: spaces or tabs), and whether the file
+    comes from CloudCompare's world (a .txt or .asc, or a first line starting with "//", the one
+    comment mark CloudCompare's ASCII reader knows)."""
+    skip: int
+    delimiter: str | None
+    cloudcompare: bool
 
 
 def _load_xyz(path: str):
@@ -352,6 +346,9 @@ def _load_xyz(path: str):
     count = None
     try:
         with open_text(path, "a text file") as f:
+            cloudcompare = (os.path.splitext(path)[1].lower() in (".txt", ".asc")
+                            or f.readline().lstrip().startswith("//"))
+            f.seek(0)
             comments = _leading_comments(f)
             where = f.tell()
             first = f.readline()
@@ -371,7 +368,7 @@ def _load_xyz(path: str):
     if count is not None and count != len(rows):
         raise ValueError(f"{path}: the count line says {count} points, the file has {len(rows)}"
                          f"{' (truncated?)' if len(rows) < count else ''}")
-    return comments, rows, _Layout(len(comments) + (count is not None), delimiter)
+    return comments, rows, _Layout(len(comments) + (count is not None), delimiter, cloudcompare)
 
 
 def _delimiter(line: str) -> str | None:
@@ -380,9 +377,11 @@ def _delimiter(line: str) -> str | None:
     ("1,5;2,25;3") is none of these: the row then stays unreadable, with the hint that says so."""
     def all_numbers(parts):
         try:
-            return len(parts) >= 3 and all(isinstance(float(p), float) for p in parts)
+            for p in parts:
+                float(p)
         except ValueError:
             return False
+        return len(parts) >= 3
     if all_numbers(line.split()):
         return None
     for mark in (",", ";"):
@@ -438,12 +437,17 @@ def _leading_comments(f) -> list:
         found.append(line.lstrip().lstrip("#/").strip())
 
 
+def _header_words(header: str) -> list:
+    """A header line's words, parted by spaces, tabs, commas or semicolons."""
+    return header.replace(",", " ").replace(";", " ").split()
+
+
 def _header_tokens(header: str, ncols: int) -> list | None:
     """The names a first comment line gives the columns, or None: its words (split at spaces,
     tabs, commas and semicolons), or, when those are too many and commas or semicolons part them
     into as many as the columns (CloudCompare's "//X,Y,Z,R,G,B,GPS Time", which parts the names
     as it parts the values), the names so parted, spaces as "_"."""
-    tokens = header.replace(",", " ").replace(";", " ").split()
+    tokens = _header_words(header)
     if len(tokens) == ncols:
         return tokens
     for mark in (",", ";"):
@@ -467,7 +471,7 @@ def _names_columns(header: str, ncols: int) -> bool:
 def _warn_if_header_unread(path: str, header: str, ncols: int) -> None:
     """A first line that starts x y z but names more or fewer columns than the rows have (a
     name with a space in it, "GPS Time") names none of them: say so, not drop the names."""
-    words = header.replace(",", " ").replace(";", " ").split()
+    words = _header_words(header)
     if _starts_with_xyz(words):
         warnings.warn(f"{path}: the header line names {len(words)} columns but the rows have {ncols}, so its names "
                       f"are not used (columns after z are read as column_3 ... and no colours): a column name "
@@ -477,8 +481,7 @@ def _warn_if_header_unread(path: str, header: str, ncols: int) -> None:
 def _parse_header(header: str, ncols: int, path: str):
     tokens = _header_tokens(header, ncols)
     if tokens is None:
-        named = len(header.replace(",", " ").replace(";", " ").split())
-        raise ValueError(f"{path}: the header names {named} columns, the rows have {ncols}")
+        raise ValueError(f"{path}: the header names {len(_header_words(header))} columns, the rows have {ncols}")
     names, dtypes = [], []
     for token in tokens:
         name, _, dtype = token.partition(":")
